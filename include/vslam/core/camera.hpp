@@ -1,0 +1,38 @@
+#pragma once
+// Pinhole camera with OpenCV's radial-tangential (k1, k2, p1, p2, k3) distortion.
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "vslam/core/types.hpp"
+
+namespace vslam {
+
+struct PinholeCamera {
+  std::string name;
+  int width = 0;
+  int height = 0;
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+  double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
+  double fps = 30.0;
+  double depth_factor = 5000.0;  // raw depth units per metre (TUM: 5000)
+  double baseline_m = 0.0;        // stereo baseline; 0 for monocular cameras
+
+  bool hasDistortion() const { return k1 != 0 || k2 != 0 || p1 != 0 || p2 != 0 || k3 != 0; }
+  cv::Mat K() const;          // 3x3 CV_64F
+  cv::Mat distCoeffs() const;  // 1x5 CV_64F (k1 k2 p1 p2 k3)
+  Mat3 Keigen() const;
+
+  // Pixel of a point in camera coordinates (no distortion: keypoints are undistorted first).
+  Vec2 project(const Vec3& p_c) const { return Vec2(fx * p_c.x() / p_c.z() + cx, fy * p_c.y() / p_c.z() + cy); }
+  // Bearing with z = 1 for an undistorted pixel.
+  Vec3 unproject(const Vec2& px) const { return Vec3((px.x() - cx) / fx, (px.y() - cy) / fy, 1.0); }
+  bool inImage(const Vec2& px, double border = 0.0) const {
+    return px.x() >= border && px.y() >= border && px.x() < width - border && px.y() < height - border;
+  }
+  // Undistorted pixel coordinates of distorted ones (identity when there is no distortion).
+  std::vector<cv::Point2f> undistort(const std::vector<cv::Point2f>& distorted) const;
+};
+
+}  // namespace vslam

@@ -1,0 +1,84 @@
+#pragma once
+// Configuration is a value: loaded once from a YAML file and passed down.
+// Defaults are the paper's parameters ("A Modified V-SLAM Technique for Road
+// Scene Modelling"): 1000 ORB features, 8 levels, scale 1.2, H/F ratio 0.45,
+// keyframe every 20 frames / < 100 tracked points / < 90 % of the reference.
+#include <string>
+#include <vector>
+
+#include "vslam/core/camera.hpp"
+
+namespace vslam {
+
+struct OrbParams {
+  int n_features = 1000;
+  int n_levels = 8;
+  double scale_factor = 1.2;
+  int fast_threshold = 20;      // normal FAST threshold
+  int fast_min_threshold = 7;   // fallback where a cell has no corner at the normal one
+};
+
+struct InitializerParams {
+  double homography_ratio = 0.45;  // take H when S_H / (S_H + S_F) > this
+  int ransac_iterations = 200;
+  double sigma_px = 1.0;
+  int min_matches = 100;
+  double min_parallax_deg = 1.0;
+  int min_triangulated = 50;
+};
+
+struct TrackingParams {
+  int max_frames_between_keyframes = 20;  // paper: a keyframe at least every 20 frames...
+  int min_tracked_points = 100;           // ...or when fewer points are tracked...
+  double ref_ratio = 0.9;                 // ...and only if < 90 % of the reference's points are tracked
+  int min_inliers = 30;                   // fewer means the frame is lost
+};
+
+struct MappingParams {
+  int min_observations = 3;  // the paper's map point survival rule
+  double min_found_ratio = 0.25;
+  double redundant_keyframe_ratio = 0.9;
+  int local_ba_iterations = 10;
+};
+
+struct LoopParams {
+  bool enabled = true;
+  int consistency = 3;
+  bool final_ba = true;
+  int final_ba_iterations = 20;
+};
+
+struct DetectorParams {
+  std::string model = "yolo-fastest-1.1-xl";  // "none" disables detection
+  std::string cfg;       // Darknet cfg; empty: resolved from `model`
+  std::string weights;   // Darknet weights; empty: resolved from `model`
+  std::string names;     // class names, one a line; empty: resolved from `model`
+  int input_size = 320;
+  double confidence_threshold = 0.4;
+  double nms_threshold = 0.45;
+  int min_box_px = 64;   // paper's Algorithm 1: skip boxes narrower or lower than this
+  std::string dnn_target = "cpu";  // cpu | opencl | cuda
+  std::vector<std::string> dynamic_classes;  // keypoints in these boxes are removed
+};
+
+struct Config {
+  std::string source;  // file the config was read from ("" for defaults)
+  PinholeCamera camera;
+  OrbParams orb;
+  InitializerParams initializer;
+  TrackingParams tracking;
+  MappingParams mapping;
+  LoopParams loop;
+  DetectorParams detector;
+};
+
+// Reads our YAML layout (see config/*.yaml) or an ORB-SLAM2 settings file
+// (Camera.fx, ORBextractor.nFeatures, ...), told apart by their keys.
+// Throws InputError naming the file (and line where known) for a missing file,
+// a missing required key, or a value of the wrong type.
+Config loadConfig(const std::string& path);
+
+// Directory holding the project's config/*.yaml.
+std::string projectConfigDir();
+
+}  // namespace vslam

@@ -1,0 +1,46 @@
+// `vslam`: one executable, one subcommand per job. Logs go to stderr,
+// results to files and stdout.
+#include <iostream>
+#include <vector>
+
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include "commands.hpp"
+#include "vslam/core/error.hpp"
+
+int main(int argc, char** argv) {
+  auto logger = spdlog::stderr_color_mt("vslam");
+  spdlog::set_default_logger(logger);
+  spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
+
+  CLI::App app{"vslam: ORB-SLAM-style visual SLAM with a YOLO object detector inside Tracking"};
+  app.require_subcommand(1);
+  app.set_help_all_flag("--help-all", "Show the help of every subcommand");
+  bool verbose = false;
+  app.add_flag("-v,--verbose", verbose, "Debug logging");
+
+  std::vector<vslam::app::Command> commands = {
+      vslam::app::addRunCommand(app),
+      vslam::app::addEvalCommand(app),
+  };
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  if (verbose) spdlog::set_level(spdlog::level::debug);
+
+  try {
+    for (const auto& command : commands)
+      if (command.cli->parsed()) return command.run();
+  } catch (const vslam::InputError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,223 @@
+#include "vslam/core/config.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <opencv2/core/persistence.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "vslam/core/error.hpp"
+
+namespace vslam {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Reads typed values out of one YAML file, naming file and line on failure.
+class YamlReader {
+ public:
+  explicit YamlReader(std::string path) : path_(std::move(path)) {}
+
+  const YAML::Node& root() const { return root_; }
+  void load() {
+    try {
+      root_ = YAML::LoadFile(path_);
+    } catch (const YAML::ParserException& e) {
+      throw InputError(path_, e.mark.line + 1, "YAML syntax error: " + e.msg);
+    } catch (const YAML::BadFile&) {
+      throw InputError(path_, 0, "cannot open config file");
+    }
+    if (!root_.IsMap()) throw InputError(path_, 0, "expected a mapping at the top level");
+  }
+
+  YAML::Node section(const char* name) const { return root_[name]; }
+
+  template <typename T>
+  void required(const YAML::Node& parent, const std::string& section, const char* key, T& out) const {
+    const YAML::Node node = parent[key];
+    if (!node) {
+      const int line = parent ? parent.Mark().line + 1 : 0;
+      throw InputError(path_, line, "missing required key '" + qualified(section, key) + "'");
+    }
+    read(node, section, key, out);
+  }
+
+  template <typename T>
+  void optional(const YAML::Node& parent, const std::string& section, const char* key, T& out) const {
+    if (!parent) return;
+    const YAML::Node node = parent[key];
+    if (node) read(node, section, key, out);
+  }
+
+ private:
+  static std::string qualified(const std::string& section, const char* key) {
+    return section.empty() ? key : section + "." + key;
+  }
+  template <typename T>
+  void read(const YAML::Node& node, const std::string& section, const char* key, T& out) const {
+    try {
+      out = node.as<T>();
+    } catch (const YAML::Exception&) {
+      throw InputError(path_, node.Mark().line + 1,
+                       "key '" + qualified(section, key) + "' has the wrong type (expected " + typeName<T>() + ")");
+    }
+  }
+  template <typename T>
+  static const char* typeName() {
+    if constexpr (std::is_same_v<T, int>) return "an integer";
+    else if constexpr (std::is_same_v<T, double>) return "a number";
+    else if constexpr (std::is_same_v<T, bool>) return "true or false";
+    else if constexpr (std::is_same_v<T, std::string>) return "a string";
+    else return "a list of strings";
+  }
+
+  std::string path_;
+  YAML::Node root_;
+};
+
+Config loadVslamYaml(const std::string& path) {
+  YamlReader reader(path);
+  reader.load();
+  Config config;
+  config.source = path;
+
+  const YAML::Node cam = reader.section("camera");
+  if (!cam) throw InputError(path, 0, "missing required section 'camera'");
+  PinholeCamera& c = config.camera;
+  reader.optional(cam, "camera", "name", c.name);
+  reader.required(cam, "camera", "width", c.width);
+  reader.required(cam, "camera", "height", c.height);
+  reader.required(cam, "camera", "fx", c.fx);
+  reader.required(cam, "camera", "fy", c.fy);
+  reader.required(cam, "camera", "cx", c.cx);
+  reader.required(cam, "camera", "cy", c.cy);
+  reader.optional(cam, "camera", "k1", c.k1);
+  reader.optional(cam, "camera", "k2", c.k2);
+  reader.optional(cam, "camera", "p1", c.p1);
+  reader.optional(cam, "camera", "p2", c.p2);
+  reader.optional(cam, "camera", "k3", c.k3);
+  reader.optional(cam, "camera", "fps", c.fps);
+  reader.optional(cam, "camera", "depth_factor", c.depth_factor);
+  reader.optional(cam, "camera", "baseline_m", c.baseline_m);
+  if (c.width <= 0 || c.height <= 0 || c.fx <= 0 || c.fy <= 0)
+    throw InputError(path, cam.Mark().line + 1, "camera width, height, fx and fy must be positive");
+
+  const YAML::Node orb = reader.section("orb");
+  reader.optional(orb, "orb", "n_features", config.orb.n_features);
+  reader.optional(orb, "orb", "n_levels", config.orb.n_levels);
+  reader.optional(orb, "orb", "scale_factor", config.orb.scale_factor);
+  reader.optional(orb, "orb", "fast_threshold", config.orb.fast_threshold);
+  reader.optional(orb, "orb", "fast_min_threshold", config.orb.fast_min_threshold);
+
+  const YAML::Node init = reader.section("initializer");
+  reader.optional(init, "initializer", "homography_ratio", config.initializer.homography_ratio);
+  reader.optional(init, "initializer", "ransac_iterations", config.initializer.ransac_iterations);
+  reader.optional(init, "initializer", "sigma_px", config.initializer.sigma_px);
+  reader.optional(init, "initializer", "min_matches", config.initializer.min_matches);
+  reader.optional(init, "initializer", "min_parallax_deg", config.initializer.min_parallax_deg);
+  reader.optional(init, "initializer", "min_triangulated", config.initializer.min_triangulated);
+
+  const YAML::Node trk = reader.section("tracking");
+  reader.optional(trk, "tracking", "max_frames_between_keyframes", config.tracking.max_frames_between_keyframes);
+  reader.optional(trk, "tracking", "min_tracked_points", config.tracking.min_tracked_points);
+  reader.optional(trk, "tracking", "ref_ratio", config.tracking.ref_ratio);
+  reader.optional(trk, "tracking", "min_inliers", config.tracking.min_inliers);
+
+  const YAML::Node map = reader.section("mapping");
+  reader.optional(map, "mapping", "min_observations", config.mapping.min_observations);
+  reader.optional(map, "mapping", "min_found_ratio", config.mapping.min_found_ratio);
+  reader.optional(map, "mapping", "redundant_keyframe_ratio", config.mapping.redundant_keyframe_ratio);
+  reader.optional(map, "mapping", "local_ba_iterations", config.mapping.local_ba_iterations);
+
+  const YAML::Node loop = reader.section("loop");
+  reader.optional(loop, "loop", "enabled", config.loop.enabled);
+  reader.optional(loop, "loop", "consistency", config.loop.consistency);
+  reader.optional(loop, "loop", "final_ba", config.loop.final_ba);
+  reader.optional(loop, "loop", "final_ba_iterations", config.loop.final_ba_iterations);
+
+  const YAML::Node det = reader.section("detector");
+  DetectorParams& d = config.detector;
+  reader.optional(det, "detector", "model", d.model);
+  reader.optional(det, "detector", "cfg", d.cfg);
+  reader.optional(det, "detector", "weights", d.weights);
+  reader.optional(det, "detector", "names", d.names);
+  reader.optional(det, "detector", "input_size", d.input_size);
+  reader.optional(det, "detector", "confidence_threshold", d.confidence_threshold);
+  reader.optional(det, "detector", "nms_threshold", d.nms_threshold);
+  reader.optional(det, "detector", "min_box_px", d.min_box_px);
+  reader.optional(det, "detector", "dnn_target", d.dnn_target);
+  reader.optional(det, "detector", "dynamic_classes", d.dynamic_classes);
+  return config;
+}
+
+// ORB-SLAM2 settings files are OpenCV FileStorage YAML ("%YAML:1.0").
+Config loadOrbSlamSettings(const std::string& path) {
+  cv::FileStorage fs;
+  try {
+    fs.open(path, cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {
+    throw InputError(path, 0, "cannot parse ORB-SLAM settings file: " + e.msg);
+  }
+  if (!fs.isOpened()) throw InputError(path, 0, "cannot open ORB-SLAM settings file");
+
+  auto number = [&](const char* key, double& out, bool required) {
+    const cv::FileNode node = fs[key];
+    if (node.empty()) {
+      if (required) throw InputError(path, 0, std::string("missing required key '") + key + "'");
+      return;
+    }
+    if (!node.isReal() && !node.isInt())
+      throw InputError(path, 0, std::string("key '") + key + "' has the wrong type (expected a number)");
+    out = static_cast<double>(node);
+  };
+  auto integer = [&](const char* key, int& out) {
+    double v = out;
+    number(key, v, false);
+    out = static_cast<int>(v);
+  };
+
+  Config config;
+  config.source = path;
+  PinholeCamera& c = config.camera;
+  c.name = std::filesystem::path(path).stem().string();
+  number("Camera.fx", c.fx, true);
+  number("Camera.fy", c.fy, true);
+  number("Camera.cx", c.cx, true);
+  number("Camera.cy", c.cy, true);
+  number("Camera.k1", c.k1, false);
+  number("Camera.k2", c.k2, false);
+  number("Camera.p1", c.p1, false);
+  number("Camera.p2", c.p2, false);
+  number("Camera.k3", c.k3, false);
+  number("Camera.fps", c.fps, false);
+  double width = 0, height = 0;
+  number("Camera.width", width, false);
+  number("Camera.height", height, false);
+  // ORB-SLAM2's TUM files omit the image size; the reader fills it from the first image.
+  c.width = static_cast<int>(width);
+  c.height = static_cast<int>(height);
+  number("DepthMapFactor", c.depth_factor, false);
+  integer("ORBextractor.nFeatures", config.orb.n_features);
+  number("ORBextractor.scaleFactor", config.orb.scale_factor, false);
+  integer("ORBextractor.nLevels", config.orb.n_levels);
+  integer("ORBextractor.iniThFAST", config.orb.fast_threshold);
+  integer("ORBextractor.minThFAST", config.orb.fast_min_threshold);
+  return config;
+}
+
+}  // namespace
+
+Config loadConfig(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "cannot open config file");
+  std::string first_line;
+  std::getline(in, first_line);
+  if (first_line.rfind("%YAML:", 0) == 0) return loadOrbSlamSettings(path);
+  in.close();
+  return loadVslamYaml(path);
+}
+
+std::string projectConfigDir() { return std::string(VSLAM_SOURCE_DIR) + "/config"; }
+
+}  // namespace vslam

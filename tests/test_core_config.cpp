@@ -1,0 +1,94 @@
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "test_support.hpp"
+#include "vslam/core/config.hpp"
+#include "vslam/core/error.hpp"
+
+namespace vslam {
+namespace {
+
+std::string writeFile(const std::string& name, const std::string& text) {
+  const auto path = test::scratchDir("config") / name;
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+std::string errorOf(const std::string& path) {
+  try {
+    loadConfig(path);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Config, LoadsEveryShippedCameraFile) {
+  for (const char* name : {"tum_fr1", "tum_fr2", "tum_fr3", "kitti_00-02", "kitti_03", "kitti_04-12"}) {
+    const Config config = loadConfig(projectConfigDir() + "/" + name + ".yaml");
+    EXPECT_EQ(config.camera.name, name);
+    EXPECT_GT(config.camera.fx, 0);
+    EXPECT_EQ(config.orb.n_features, 1000);
+    EXPECT_EQ(config.orb.n_levels, 8);
+    EXPECT_DOUBLE_EQ(config.orb.scale_factor, 1.2);
+    EXPECT_DOUBLE_EQ(config.initializer.homography_ratio, 0.45);
+    EXPECT_EQ(config.tracking.max_frames_between_keyframes, 20);
+    EXPECT_EQ(config.tracking.min_tracked_points, 100);
+    EXPECT_DOUBLE_EQ(config.tracking.ref_ratio, 0.9);
+    EXPECT_EQ(config.mapping.min_observations, 3);
+  }
+  const Config fr1 = loadConfig(projectConfigDir() + "/tum_fr1.yaml");
+  EXPECT_DOUBLE_EQ(fr1.camera.fx, 517.306408);
+  EXPECT_DOUBLE_EQ(fr1.camera.k3, 1.163314);
+  EXPECT_TRUE(fr1.camera.hasDistortion());
+}
+
+TEST(Config, MissingFileNamesTheFile) {
+  const std::string message = errorOf("/nonexistent/cam.yaml");
+  EXPECT_NE(message.find("/nonexistent/cam.yaml"), std::string::npos) << message;
+  EXPECT_NE(message.find("cannot open"), std::string::npos) << message;
+}
+
+TEST(Config, MissingKeyIsNamed) {
+  const std::string path = writeFile("missing.yaml", "camera:\n  width: 640\n  height: 480\n  fx: 500\n  cx: 320\n  cy: 240\n");
+  const std::string message = errorOf(path);
+  EXPECT_NE(message.find(path), std::string::npos) << message;
+  EXPECT_NE(message.find("camera.fy"), std::string::npos) << message;
+}
+
+TEST(Config, WrongTypeGivesLine) {
+  const std::string path =
+      writeFile("wrongtype.yaml", "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: 500\n  cx: 320\n  cy: 240\norb:\n  n_features: many\n");
+  const std::string message = errorOf(path);
+  EXPECT_NE(message.find(path + ":9:"), std::string::npos) << message;
+  EXPECT_NE(message.find("orb.n_features"), std::string::npos) << message;
+  EXPECT_NE(message.find("integer"), std::string::npos) << message;
+}
+
+TEST(Config, LoadsOrbSlam2Settings) {
+  const std::string path = writeFile("TUM1.yaml",
+                                     "%YAML:1.0\nCamera.fx: 517.306408\nCamera.fy: 516.469215\nCamera.cx: 318.643040\n"
+                                     "Camera.cy: 255.313989\nCamera.k1: 0.262383\nCamera.k2: -0.953104\nCamera.p1: -0.005358\n"
+                                     "Camera.p2: 0.002628\nCamera.k3: 1.163314\nCamera.fps: 30.0\nCamera.RGB: 1\n"
+                                     "ORBextractor.nFeatures: 1500\nORBextractor.scaleFactor: 1.3\nORBextractor.nLevels: 6\n"
+                                     "ORBextractor.iniThFAST: 25\nORBextractor.minThFAST: 8\n");
+  const Config config = loadConfig(path);
+  EXPECT_DOUBLE_EQ(config.camera.fx, 517.306408);
+  EXPECT_DOUBLE_EQ(config.camera.k1, 0.262383);
+  EXPECT_EQ(config.orb.n_features, 1500);
+  EXPECT_DOUBLE_EQ(config.orb.scale_factor, 1.3);
+  EXPECT_EQ(config.orb.n_levels, 6);
+  EXPECT_EQ(config.orb.fast_threshold, 25);
+  EXPECT_EQ(config.orb.fast_min_threshold, 8);
+}
+
+TEST(Config, OrbSlam2SettingsMissingKeyIsNamed) {
+  const std::string path = writeFile("bad_orbslam.yaml", "%YAML:1.0\nCamera.fx: 517.3\nCamera.cx: 318.6\nCamera.cy: 255.3\n");
+  const std::string message = errorOf(path);
+  EXPECT_NE(message.find("Camera.fy"), std::string::npos) << message;
+  EXPECT_NE(message.find(path), std::string::npos) << message;
+}
+
+}  // namespace
+}  // namespace vslam

@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# Installs vslam's build dependencies from Debian's archive (idempotent,
+# non-interactive), then configures and builds into ./build.
+#   tools/setup.sh [--build-dir DIR] [--skip-install]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+build_dir=build
+skip_install=0
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --build-dir) build_dir="$2"; shift 2 ;;
+    --skip-install) skip_install=1; shift ;;
+    -h|--help) sed -n '2,5p' "$0"; exit 0 ;;
+    *) echo "setup.sh: unknown option '$1'" >&2; exit 2 ;;
+  esac
+done
+
+packages=(build-essential cmake pkg-config
+          libopencv-dev libeigen3-dev libceres-dev libyaml-cpp-dev libcli11-dev
+          libspdlog-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev libosmesa6-dev)
+
+if [ "$skip_install" = 0 ]; then
+  missing=()
+  for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  if [ ${#missing[@]} -gt 0 ]; then
+    echo "setup.sh: installing ${missing[*]}" >&2
+    sudo_cmd=()
+    [ "$(id -u)" = 0 ] || sudo_cmd=(sudo)
+    "${sudo_cmd[@]}" apt-get update -q
+    DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
+  fi
+fi
+
+jobs=$(nproc 2>/dev/null || echo 2)
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$build_dir" -j "$jobs"
+
+# Data and models are found at run time ($VSLAM_DATA / $VSLAM_MODELS, ./data,
+# ./models, ../shared); say where they were found so a user knows what runs.
+for d in "${VSLAM_DATA:-}" data ../shared/data; do
+  if [ -n "$d" ] && [ -d "$d/tum" -o -d "$d/kitti" ]; then echo "setup.sh: datasets found in $d" >&2; break; fi
+done
+for d in "${VSLAM_MODELS:-}" models ../shared/models; do
+  if [ -n "$d" ] && ls "$d"/*/*.weights >/dev/null 2>&1; then echo "setup.sh: detector models found in $d" >&2; break; fi
+done
+echo "setup.sh: built $build_dir/vslam" >&2

@@ -1,0 +1,63 @@
+#pragma once
+// A camera frame after feature extraction: keypoints (as detected, distorted),
+// their undistorted positions, descriptors, object labels, and — once tracked —
+// a pose and the map points its keypoints were matched to.
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "vslam/core/camera.hpp"
+#include "vslam/core/types.hpp"
+#include "vslam/feature/matcher.hpp"
+
+namespace vslam {
+
+class MapPoint;
+
+// Pyramid geometry shared by every frame of a run (from the ORB extractor).
+struct ScalePyramid {
+  int levels = 1;
+  double scale_factor = 1.2;
+  std::vector<double> scale;           // scale_factor^level
+  std::vector<double> sigma2;          // scale^2
+  std::vector<double> inv_sigma2;      // 1 / scale^2
+  double logScaleFactor() const;
+};
+
+// Per-keypoint semantic label from the keypoint filter (the paper's Algorithm 1).
+struct FeatureLabel {
+  int class_id = -1;      // COCO class, -1 = not inside a detection box
+  int detection_id = -1;  // index of the detection in its frame, -1 = none
+};
+
+struct Frame {
+  long id = -1;       // running frame number in the run
+  int index = -1;     // position in the sequence
+  double timestamp = 0.0;
+  const PinholeCamera* camera = nullptr;
+  const ScalePyramid* pyramid = nullptr;
+
+  std::vector<cv::KeyPoint> keypoints;  // as detected (distorted pixels)
+  std::vector<Vec2> points;             // undistorted pixels
+  cv::Mat descriptors;                  // N x 32, CV_8U
+  std::vector<FeatureLabel> labels;     // one per keypoint
+  std::vector<cv::Vec3b> colours;       // BGR at each keypoint
+  std::vector<float> depth;             // metres per keypoint (RGB-D), <= 0 none; empty in mono
+  FeatureGrid grid;                     // spatial index of `points`
+
+  // Tracking state.
+  bool has_pose = false;
+  SE3 T_cw;
+  std::vector<MapPoint*> map_points;  // per keypoint, nullptr = unmatched
+  std::vector<bool> outlier;          // per keypoint, set by pose optimisation
+
+  size_t size() const { return keypoints.size(); }
+  int level(size_t i) const { return keypoints[i].octave; }
+  Vec3 cameraCentre() const { return -(T_cw.R.transpose() * T_cw.t); }
+  // Prepares matching state after keypoints/points are filled.
+  void finalizeFeatures();
+  int trackedCount() const;  // matched, non-outlier keypoints
+};
+
+}  // namespace vslam

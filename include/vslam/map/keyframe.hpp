@@ -1,0 +1,103 @@
+#pragma once
+// A keyframe: a frame kept in the map, with its matched map points, its place
+// in the covisibility graph and spanning tree, and its bag-of-words vectors.
+//
+// Not thread-safe by itself: every access goes through Map's lock (see map.hpp).
+#include <map>
+#include <set>
+#include <vector>
+
+#include "vslam/map/frame.hpp"
+
+namespace vslam {
+
+class KeyFrame {
+ public:
+  KeyFrame(long id, const Frame& frame);
+
+  long id() const { return id_; }
+  long frameId() const { return frame_id_; }
+  int frameIndex() const { return frame_index_; }
+  double timestamp() const { return timestamp_; }
+  bool isBad() const { return bad_; }
+
+  const SE3& pose() const { return T_cw_; }  // world -> camera
+  void setPose(const SE3& T_cw) { T_cw_ = T_cw; }
+  Vec3 cameraCentre() const { return -(T_cw_.R.transpose() * T_cw_.t); }
+
+  // Features (copied from the frame, fixed for the keyframe's life).
+  const PinholeCamera& camera() const { return *camera_; }
+  const ScalePyramid& pyramid() const { return *pyramid_; }
+  size_t size() const { return keypoints.size(); }
+  std::vector<cv::KeyPoint> keypoints;
+  std::vector<Vec2> points;
+  cv::Mat descriptors;
+  std::vector<FeatureLabel> labels;
+  std::vector<cv::Vec3b> colours;
+  std::vector<float> depth;
+  FeatureGrid grid;
+
+  // Map point associations, one slot per keypoint.
+  MapPoint* mapPoint(size_t i) const { return map_points_[i]; }
+  const std::vector<MapPoint*>& mapPoints() const { return map_points_; }
+  void setMapPoint(size_t i, MapPoint* point) { map_points_[i] = point; }
+  void eraseMapPoint(MapPoint* point);
+  // Good map points observed by at least `min_observations` keyframes.
+  int trackedMapPoints(int min_observations) const;
+  std::set<MapPoint*> goodMapPoints() const;
+
+  // Covisibility graph: weight = number of shared map points.
+  void updateConnections();
+  void addConnection(KeyFrame* other, int weight);
+  void eraseConnection(KeyFrame* other);
+  std::vector<KeyFrame*> bestCovisibles(size_t n) const;
+  std::vector<KeyFrame*> covisiblesWithWeight(int min_weight) const;
+  const std::vector<KeyFrame*>& orderedCovisibles() const { return ordered_covisibles_; }
+  int weight(KeyFrame* other) const;
+
+  // Spanning tree (strongest covisibility parent) and loop edges.
+  KeyFrame* parent() const { return parent_; }
+  const std::set<KeyFrame*>& children() const { return children_; }
+  void changeParent(KeyFrame* parent);
+  void addLoopEdge(KeyFrame* other) { loop_edges_.insert(other); }
+  const std::set<KeyFrame*>& loopEdges() const { return loop_edges_; }
+
+  // Removes the keyframe from the graph (reparenting its children) and detaches its points.
+  void setBad();
+  // Pose relative to its parent, frozen when the keyframe is culled, so frames
+  // that referred to it still get a pose: T_this_parent.
+  const SE3& poseRelativeToParent() const { return T_c_parent_; }
+
+  // Median depth of its map points in its camera (scene depth for baselines).
+  double medianSceneDepth() const;
+
+  bool not_erase = false;  // held by Loop Closing while it works with it
+  // Scratch for Tracking's local map and Local Mapping.
+  long track_local_for_frame = -1;
+  long fuse_target_for_kf = -1;
+  long ba_local_for_kf = -1;
+  long ba_fixed_for_kf = -1;
+
+ private:
+  void updateOrder();
+
+  long id_;
+  long frame_id_;
+  int frame_index_;
+  double timestamp_;
+  const PinholeCamera* camera_;
+  const ScalePyramid* pyramid_;
+  SE3 T_cw_;
+  std::vector<MapPoint*> map_points_;
+  std::map<KeyFrame*, int> connection_weights_;
+  std::vector<KeyFrame*> ordered_covisibles_;
+  std::vector<int> ordered_weights_;
+  KeyFrame* parent_ = nullptr;
+  std::set<KeyFrame*> children_;
+  std::set<KeyFrame*> loop_edges_;
+  SE3 T_c_parent_;
+  bool first_connection_ = true;
+  bool bad_ = false;
+};
+
+}  // namespace vslam

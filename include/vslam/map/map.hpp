@@ -1,0 +1,56 @@
+#pragma once
+// The map database: every keyframe and map point of a run. It is the only
+// state the SLAM threads share.
+//
+// Locking rule (the one place it is written down): keyframes, map points and
+// their graph links are read or written only while holding `Map::mutex()`.
+// Tracking holds it while it matches against and updates the map for a frame
+// (not during feature extraction or detection); Local Mapping and Loop Closing
+// hold it for each step that reads or changes the map, and release it while
+// Ceres solves (they copy values into plain optimisation problems and copy the
+// results back under the lock). Objects are never freed during a run — a
+// culled keyframe or point is only flagged bad — so a pointer taken under the
+// lock stays valid after it is released, though its contents may then change.
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "vslam/map/keyframe.hpp"
+#include "vslam/map/map_point.hpp"
+
+namespace vslam {
+
+class Map {
+ public:
+  std::mutex& mutex() const { return mutex_; }
+
+  KeyFrame* createKeyFrame(const Frame& frame);
+  MapPoint* createMapPoint(const Vec3& position_w, KeyFrame* reference);
+
+  // Live (not bad) objects, in creation order.
+  std::vector<KeyFrame*> keyframes() const;
+  std::vector<MapPoint*> mapPoints() const;
+  size_t keyframeCount() const;
+  size_t mapPointCount() const;
+  KeyFrame* firstKeyFrame() const { return keyframes_.empty() ? nullptr : keyframes_.front().get(); }
+  // Every keyframe ever created, bad ones included (trajectory output follows culled keyframes' children).
+  const std::vector<std::unique_ptr<KeyFrame>>& allKeyFrames() const { return keyframes_; }
+  long maxKeyFrameId() const { return next_keyframe_id_ - 1; }
+
+  // Destroys everything (a failed initialisation). Only when no thread holds pointers into the map.
+  void clear();
+
+  // Monotonic counter of changes that invalidate tracking's references (loop corrections).
+  int bigChangeIndex() const { return big_change_index_; }
+  void informBigChange() { ++big_change_index_; }
+
+ private:
+  mutable std::mutex mutex_;
+  std::vector<std::unique_ptr<KeyFrame>> keyframes_;
+  std::vector<std::unique_ptr<MapPoint>> map_points_;
+  long next_keyframe_id_ = 0;
+  long next_map_point_id_ = 0;
+  int big_change_index_ = 0;
+};
+
+}  // namespace vslam

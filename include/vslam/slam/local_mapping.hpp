@@ -1,0 +1,72 @@
+#pragma once
+// The Local Mapping thread: takes new keyframes from Tracking, links them into
+// the map, culls weak points, triangulates new ones with covisible keyframes,
+// fuses duplicates, runs local bundle adjustment and culls redundant keyframes.
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <list>
+#include <mutex>
+#include <thread>
+
+#include "vslam/core/config.hpp"
+#include "vslam/core/stage_timer.hpp"
+#include "vslam/map/map.hpp"
+
+namespace vslam {
+
+class LocalMapping {
+ public:
+  LocalMapping(const Config& config, Map& map, StageTimer* timer);
+  ~LocalMapping();
+
+  // Called by Tracking (or initialisation) with a keyframe not yet linked into the map.
+  void insertKeyFrame(KeyFrame* keyframe);
+  // True when the queue is empty and no keyframe is being processed.
+  bool acceptsKeyFrames() const { return accepting_.load(); }
+  size_t queuedKeyFrames() const;
+  // Asks a running local BA to stop early (a new keyframe is waiting).
+  void interruptBundleAdjustment() { abort_ba_.store(true); }
+
+  // Drops queued keyframes and waits until nothing is being processed (map reset).
+  void reset();
+
+  // Deterministic mode: processes every queued keyframe on the caller's thread.
+  void processQueued();
+  // Threaded mode.
+  void start();
+  void finish();  // processes what is queued, then stops the thread
+
+  int localBundleAdjustments() const { return local_ba_count_; }
+  int culledKeyFrames() const { return culled_keyframes_; }
+
+ private:
+  void run();
+  bool queueEmpty() const;
+  void processKeyFrame(KeyFrame* keyframe);
+  void linkKeyFrame(KeyFrame* keyframe);
+  void cullRecentMapPoints(KeyFrame* keyframe);
+  void triangulateNewPoints(KeyFrame* keyframe);
+  void fuseDuplicates(KeyFrame* keyframe);
+  void localBundleAdjustment(KeyFrame* keyframe);
+  void cullRedundantKeyFrames(KeyFrame* keyframe);
+
+  Config config_;
+  Map& map_;
+  StageTimer* timer_;
+
+  mutable std::mutex queue_mutex_;
+  std::condition_variable queue_cv_;
+  std::deque<KeyFrame*> queue_;
+  std::atomic<bool> accepting_{true};
+  bool processing_ = false;  // guarded by queue_mutex_
+  std::atomic<bool> abort_ba_{false};
+  bool finish_requested_ = false;
+  std::thread thread_;
+
+  std::list<MapPoint*> recent_points_;  // touched only by the mapping step
+  int local_ba_count_ = 0;
+  int culled_keyframes_ = 0;
+};
+
+}  // namespace vslam

@@ -1,0 +1,50 @@
+#pragma once
+// Matching between frames and the map: search by projection (last frame,
+// local map, keyframe), descriptor matching against a keyframe, and fusion of
+// duplicate map points. Callers hold the map lock (see map/map.hpp).
+#include <vector>
+
+#include "vslam/map/frame.hpp"
+#include "vslam/map/keyframe.hpp"
+#include "vslam/map/map_point.hpp"
+
+namespace vslam {
+
+// Hamming thresholds on 256-bit descriptors.
+constexpr int kDescriptorHighThreshold = 100;
+constexpr int kDescriptorLowThreshold = 50;
+
+// Projects the last frame's map points with the current frame's (predicted)
+// pose and matches them in a window of `radius_px` times the keypoint's scale.
+int searchByProjection(Frame& current, const Frame& last, double radius_px, bool check_orientation = true);
+
+// Whether a map point projects into the frame, within its scale range and
+// viewing angle; fills the point's track_* scratch (projection, level, view cos).
+bool isInFrustum(MapPoint* point, const Frame& frame, double min_view_cos = 0.5);
+
+// Matches local map points (already checked with isInFrustum) into the frame.
+int searchLocalPoints(Frame& frame, const std::vector<MapPoint*>& points, double radius_factor);
+
+// Projects a keyframe's map points (those not in `already_found`) with the
+// frame's pose and matches them; used after relocalisation and as a fallback.
+int searchByProjection(Frame& frame, const KeyFrame& keyframe, const std::vector<MapPoint*>& already_found,
+                       double radius_px, int max_descriptor_distance);
+
+// Matches the keyframe's map points to the frame by descriptor alone (best
+// match among all features with a ratio test and rotation consistency);
+// fills `matches` (per frame keypoint) and returns the count. Used to track the
+// reference keyframe when the motion model fails.
+int searchByDescriptor(const KeyFrame& keyframe, const Frame& frame, std::vector<MapPoint*>& matches,
+                       double ratio = 0.7);
+
+// Pairs of keypoints (index in kf1, index in kf2), both without a map point,
+// whose descriptors agree and which satisfy the epipolar constraint of F12
+// (x1' F12 x2 = 0); candidates for triangulating new map points.
+std::vector<std::pair<int, int>> searchForTriangulation(const KeyFrame& kf1, const KeyFrame& kf2, const Mat3& F12);
+
+// Projects `points` into `keyframe` and fuses each with the keyframe's
+// matching keypoint: adds an observation, or merges with the point already
+// there (keeping the one seen more). Returns the number fused.
+int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius_factor = 3.0);
+
+}  // namespace vslam

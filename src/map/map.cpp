@@ -1,0 +1,49 @@
+#include "vslam/map/map.hpp"
+
+namespace vslam {
+
+KeyFrame* Map::createKeyFrame(const Frame& frame) {
+  keyframes_.push_back(std::make_unique<KeyFrame>(next_keyframe_id_++, frame));
+  return keyframes_.back().get();
+}
+
+MapPoint* Map::createMapPoint(const Vec3& position_w, KeyFrame* reference) {
+  map_points_.push_back(std::make_unique<MapPoint>(next_map_point_id_++, position_w, reference, reference->id()));
+  return map_points_.back().get();
+}
+
+std::vector<KeyFrame*> Map::keyframes() const {
+  std::vector<KeyFrame*> result;
+  result.reserve(keyframes_.size());
+  for (const auto& keyframe : keyframes_)
+    if (!keyframe->isBad()) result.push_back(keyframe.get());
+  return result;
+}
+
+std::vector<MapPoint*> Map::mapPoints() const {
+  std::vector<MapPoint*> result;
+  result.reserve(map_points_.size());
+  for (const auto& point : map_points_)
+    if (!point->isBad()) result.push_back(point.get());
+  return result;
+}
+
+void Map::clear() {
+  keyframes_.clear();
+  map_points_.clear();
+  ++big_change_index_;
+}
+
+size_t Map::keyframeCount() const {
+  size_t n = 0;
+  for (const auto& keyframe : keyframes_) n += keyframe->isBad() ? 0 : 1;
+  return n;
+}
+
+size_t Map::mapPointCount() const {
+  size_t n = 0;
+  for (const auto& point : map_points_) n += point->isBad() ? 0 : 1;
+  return n;
+}
+
+}  // namespace vslam

@@ -1,0 +1,393 @@
+#include "vslam/slam/local_mapping.hpp"
+
+#include <algorithm>
+#include <set>
+
+#include <spdlog/spdlog.h>
+
+#include "vslam/geometry/triangulation.hpp"
+#include "vslam/optimize/bundle_adjuster.hpp"
+#include "vslam/slam/map_matching.hpp"
+
+namespace vslam {
+namespace {
+
+constexpr size_t kTriangulationNeighbours = 20;  // monocular, as ORB-SLAM
+constexpr size_t kFuseNeighbours = 20;
+constexpr size_t kFuseSecondNeighbours = 5;
+constexpr double kMinParallaxCos = 0.9998;
+
+Mat3 skew(const Vec3& v) {
+  Mat3 m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+// Fundamental matrix mapping points of keyframe 2 to epipolar lines in keyframe 1.
+Mat3 fundamental12(const KeyFrame& kf1, const KeyFrame& kf2) {
+  const Mat3 R12 = kf1.pose().R * kf2.pose().R.transpose();
+  const Vec3 t12 = -R12 * kf2.pose().t + kf1.pose().t;
+  const Mat3 K1 = kf1.camera().Keigen();
+  const Mat3 K2 = kf2.camera().Keigen();
+  return K1.transpose().inverse() * skew(t12) * R12 * K2.inverse();
+}
+
+}  // namespace
+
+LocalMapping::LocalMapping(const Config& config, Map& map, StageTimer* timer)
+    : config_(config), map_(map), timer_(timer) {}
+
+LocalMapping::~LocalMapping() { finish(); }
+
+void LocalMapping::insertKeyFrame(KeyFrame* keyframe) {
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    queue_.push_back(keyframe);
+    accepting_.store(false);
+  }
+  abort_ba_.store(true);
+  queue_cv_.notify_all();
+}
+
+size_t LocalMapping::queuedKeyFrames() const {
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  return queue_.size();
+}
+
+void LocalMapping::reset() {
+  std::unique_lock<std::mutex> lock(queue_mutex_);
+  queue_.clear();
+  queue_cv_.wait(lock, [this] { return !processing_; });
+  recent_points_.clear();
+  accepting_.store(true);
+}
+
+void LocalMapping::processQueued() {
+  while (true) {
+    KeyFrame* keyframe = nullptr;
+    {
+      std::lock_guard<std::mutex> lock(queue_mutex_);
+      if (queue_.empty()) {
+        accepting_.store(true);
+        return;
+      }
+      keyframe = queue_.front();
+      queue_.pop_front();
+    }
+    abort_ba_.store(false);
+    processKeyFrame(keyframe);
+  }
+}
+
+void LocalMapping::start() {
+  finish_requested_ = false;
+  thread_ = std::thread([this] { run(); });
+}
+
+void LocalMapping::finish() {
+  if (!thread_.joinable()) return;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    finish_requested_ = true;
+  }
+  queue_cv_.notify_all();
+  thread_.join();
+}
+
+void LocalMapping::run() {
+  while (true) {
+    KeyFrame* keyframe = nullptr;
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      if (queue_.empty()) accepting_.store(true);
+      queue_cv_.wait(lock, [this] { return !queue_.empty() || finish_requested_; });
+      if (queue_.empty()) return;  // finish requested and nothing left
+      keyframe = queue_.front();
+      queue_.pop_front();
+      processing_ = true;
+      accepting_.store(false);
+    }
+    abort_ba_.store(false);
+    processKeyFrame(keyframe);
+    {
+      std::lock_guard<std::mutex> lock(queue_mutex_);
+      processing_ = false;
+    }
+    queue_cv_.notify_all();
+  }
+}
+
+bool LocalMapping::queueEmpty() const {
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  return queue_.empty();
+}
+
+void LocalMapping::processKeyFrame(KeyFrame* keyframe) {
+  ScopedStage stage(timer_, "local_mapping");
+  {
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    if (keyframe->isBad()) return;
+    linkKeyFrame(keyframe);
+    cullRecentMapPoints(keyframe);
+    triangulateNewPoints(keyframe);
+    if (queueEmpty()) fuseDuplicates(keyframe);
+  }
+  if (queueEmpty() && map_.keyframeCount() > 2) {
+    localBundleAdjustment(keyframe);
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    cullRedundantKeyFrames(keyframe);
+  }
+}
+
+void LocalMapping::linkKeyFrame(KeyFrame* keyframe) {
+  const ScalePyramid& pyramid = keyframe->pyramid();
+  for (size_t i = 0; i < keyframe->size(); ++i) {
+    MapPoint* point = keyframe->mapPoint(i);
+    if (!point) continue;
+    if (point->isBad()) {
+      keyframe->setMapPoint(i, nullptr);
+      continue;
+    }
+    if (point->keypointIn(keyframe) < 0) {
+      point->addObservation(keyframe, static_cast<int>(i));
+      point->updateNormalAndDepth(pyramid);
+      point->updateDescriptor();
+      point->updateClass();
+    } else if (point->firstKeyframeId() == keyframe->id() || point->observationCount() == 2) {
+      // Created together with this keyframe (map initialisation): watch it like a new point.
+      if (std::find(recent_points_.begin(), recent_points_.end(), point) == recent_points_.end())
+        recent_points_.push_back(point);
+    }
+  }
+  keyframe->updateConnections();
+}
+
+void LocalMapping::cullRecentMapPoints(KeyFrame* keyframe) {
+  const int min_observations = config_.mapping.min_observations;
+  for (auto it = recent_points_.begin(); it != recent_points_.end();) {
+    MapPoint* point = *it;
+    const long age = keyframe->id() - point->firstKeyframeId();
+    if (point->isBad()) {
+      it = recent_points_.erase(it);
+    } else if (point->foundRatio() < config_.mapping.min_found_ratio) {
+      point->setBad();
+      it = recent_points_.erase(it);
+    } else if (age >= 2 && point->observationCount() < min_observations) {
+      // The paper's rule: a point must be seen in at least 3 keyframes.
+      point->setBad();
+      it = recent_points_.erase(it);
+    } else if (age >= 3) {
+      it = recent_points_.erase(it);  // survived its probation
+    } else {
+      ++it;
+    }
+  }
+}
+
+void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
+  const PinholeCamera& camera = keyframe->camera();
+  const ScalePyramid& pyramid = keyframe->pyramid();
+  const Mat3 K_inv = camera.Keigen().inverse();
+  const SE3& T1 = keyframe->pose();
+  const Vec3 C1 = keyframe->cameraCentre();
+  const double ratio_factor = 1.5 * pyramid.scale_factor;
+  int created = 0;
+
+  for (KeyFrame* neighbour : keyframe->bestCovisibles(kTriangulationNeighbours)) {
+    const Vec3 C2 = neighbour->cameraCentre();
+    // Too short a baseline for the scene depth gives unreliable depth.
+    if ((C2 - C1).norm() / neighbour->medianSceneDepth() < 0.01) continue;
+    const Mat3 F12 = fundamental12(*keyframe, *neighbour);
+    const std::vector<std::pair<int, int>> matches = searchForTriangulation(*keyframe, *neighbour, F12);
+    const SE3& T2 = neighbour->pose();
+    Eigen::Matrix<double, 3, 4> P1, P2;
+    P1 << T1.R, T1.t;
+    P2 << T2.R, T2.t;
+    for (const auto& [i1, i2] : matches) {
+      const cv::KeyPoint& kp1 = keyframe->keypoints[i1];
+      const cv::KeyPoint& kp2 = neighbour->keypoints[i2];
+      const Vec3 xn1 = K_inv * keyframe->points[i1].homogeneous();
+      const Vec3 xn2 = K_inv * neighbour->points[i2].homogeneous();
+      const Vec3 ray1 = T1.R.transpose() * xn1;
+      const Vec3 ray2 = T2.R.transpose() * xn2;
+      const double parallax_cos = ray1.dot(ray2) / (ray1.norm() * ray2.norm());
+      if (parallax_cos <= 0 || parallax_cos >= kMinParallaxCos) continue;
+      Vec3 X;
+      if (!triangulateDlt(P1, P2, xn1.head<2>(), xn2.head<2>(), X)) continue;
+      const Vec3 p1 = T1 * X, p2 = T2 * X;
+      if (p1.z() <= 0 || p2.z() <= 0) continue;
+      // Reprojection within the 95 % chi-square bound at each keypoint's scale.
+      if ((camera.project(p1) - keyframe->points[i1]).squaredNorm() > 5.991 * pyramid.sigma2[kp1.octave]) continue;
+      if ((neighbour->camera().project(p2) - neighbour->points[i2]).squaredNorm() >
+          5.991 * pyramid.sigma2[kp2.octave])
+        continue;
+      // The distance ratio must agree with the pyramid levels the point was seen at.
+      const double dist1 = (X - C1).norm(), dist2 = (X - C2).norm();
+      if (dist1 <= 0 || dist2 <= 0) continue;
+      const double ratio_dist = dist2 / dist1;
+      const double ratio_octave = pyramid.scale[kp1.octave] / pyramid.scale[kp2.octave];
+      if (ratio_dist * ratio_factor < ratio_octave || ratio_dist > ratio_octave * ratio_factor) continue;
+
+      MapPoint* point = map_.createMapPoint(X, keyframe);
+      point->addObservation(keyframe, i1);
+      point->addObservation(neighbour, i2);
+      keyframe->setMapPoint(i1, point);
+      neighbour->setMapPoint(i2, point);
+      point->setColour(keyframe->colours[i1]);
+      point->updateDescriptor();
+      point->updateNormalAndDepth(pyramid);
+      point->updateClass();
+      recent_points_.push_back(point);
+      ++created;
+    }
+  }
+  spdlog::debug("keyframe {}: {} new map points", keyframe->id(), created);
+}
+
+void LocalMapping::fuseDuplicates(KeyFrame* keyframe) {
+  std::vector<KeyFrame*> targets;
+  for (KeyFrame* neighbour : keyframe->bestCovisibles(kFuseNeighbours)) {
+    if (neighbour->fuse_target_for_kf == keyframe->id()) continue;
+    neighbour->fuse_target_for_kf = keyframe->id();
+    targets.push_back(neighbour);
+  }
+  const size_t first_ring = targets.size();
+  for (size_t k = 0; k < first_ring; ++k)
+    for (KeyFrame* second : targets[k]->bestCovisibles(kFuseSecondNeighbours)) {
+      if (second->fuse_target_for_kf == keyframe->id() || second == keyframe) continue;
+      second->fuse_target_for_kf = keyframe->id();
+      targets.push_back(second);
+    }
+
+  // This keyframe's points into its neighbours...
+  std::vector<MapPoint*> own_points;
+  for (MapPoint* point : keyframe->mapPoints())
+    if (point && !point->isBad()) own_points.push_back(point);
+  for (KeyFrame* target : targets) fuse(target, own_points);
+
+  // ...and the neighbours' points into this keyframe.
+  std::vector<MapPoint*> candidates;
+  for (KeyFrame* target : targets)
+    for (MapPoint* point : target->mapPoints()) {
+      if (!point || point->isBad() || point->fuse_candidate_for_kf == keyframe->id()) continue;
+      point->fuse_candidate_for_kf = keyframe->id();
+      candidates.push_back(point);
+    }
+  fuse(keyframe, candidates);
+
+  for (MapPoint* point : keyframe->mapPoints())
+    if (point && !point->isBad()) {
+      point->updateDescriptor();
+      point->updateNormalAndDepth(keyframe->pyramid());
+      point->updateClass();
+    }
+  keyframe->updateConnections();
+}
+
+void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
+  ScopedStage stage(timer_, "local_ba");
+  BundleProblem problem;
+  std::vector<KeyFrame*> keyframes;
+  std::vector<MapPoint*> points;
+  {
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    if (keyframe->isBad()) return;
+    // Free: the keyframe and its covisible neighbours.
+    std::vector<KeyFrame*> local = {keyframe};
+    keyframe->ba_local_for_kf = keyframe->id();
+    for (KeyFrame* neighbour : keyframe->orderedCovisibles()) {
+      if (neighbour->isBad()) continue;
+      neighbour->ba_local_for_kf = keyframe->id();
+      local.push_back(neighbour);
+    }
+    for (KeyFrame* kf : local)
+      for (MapPoint* point : kf->mapPoints()) {
+        if (!point || point->isBad() || point->ba_local_for_kf == keyframe->id()) continue;
+        point->ba_local_for_kf = keyframe->id();
+        points.push_back(point);
+      }
+    // Fixed: every other keyframe that sees those points.
+    std::vector<KeyFrame*> fixed;
+    for (MapPoint* point : points)
+      for (const auto& [kf, index] : point->observations()) {
+        if (kf->isBad() || kf->ba_local_for_kf == keyframe->id() || kf->ba_fixed_for_kf == keyframe->id()) continue;
+        kf->ba_fixed_for_kf = keyframe->id();
+        fixed.push_back(kf);
+      }
+    std::map<KeyFrame*, int> slot;
+    for (KeyFrame* kf : local) {
+      slot[kf] = static_cast<int>(problem.keyframes.size());
+      // The first keyframe anchors the gauge.
+      problem.keyframes.push_back({kf->id(), kf->pose(), kf->id() == 0});
+      keyframes.push_back(kf);
+    }
+    for (KeyFrame* kf : fixed) {
+      slot[kf] = static_cast<int>(problem.keyframes.size());
+      problem.keyframes.push_back({kf->id(), kf->pose(), true});
+      keyframes.push_back(kf);
+    }
+    const ScalePyramid& pyramid = keyframe->pyramid();
+    for (size_t p = 0; p < points.size(); ++p) {
+      problem.points.push_back({points[p]->id(), points[p]->position(), false});
+      for (const auto& [kf, index] : points[p]->observations()) {
+        auto it = slot.find(kf);
+        if (it == slot.end()) continue;
+        problem.observations.push_back({it->second, static_cast<int>(p), kf->points[index],
+                                        pyramid.inv_sigma2[kf->keypoints[index].octave]});
+      }
+    }
+  }
+
+  BundleOptions options;
+  options.iterations_first = 5;
+  options.iterations_second = config_.mapping.local_ba_iterations;
+  options.abort_flag = &abort_ba_;
+  const BundleResult result = bundleAdjust(keyframe->camera(), 0.0, problem, options);
+  ++local_ba_count_;
+
+  std::lock_guard<std::mutex> lock(map_.mutex());
+  for (size_t o = 0; o < problem.observations.size(); ++o) {
+    if (!result.outlier[o]) continue;
+    KeyFrame* kf = keyframes[problem.observations[o].keyframe];
+    MapPoint* point = points[problem.observations[o].point];
+    if (point->isBad() || kf->isBad()) continue;
+    kf->eraseMapPoint(point);
+    point->eraseObservation(kf);
+  }
+  for (size_t k = 0; k < keyframes.size(); ++k)
+    if (!problem.keyframes[k].fixed && !keyframes[k]->isBad()) keyframes[k]->setPose(problem.keyframes[k].T_cw);
+  for (size_t p = 0; p < points.size(); ++p) {
+    if (points[p]->isBad()) continue;
+    points[p]->setPosition(problem.points[p].position_w);
+    points[p]->updateNormalAndDepth(keyframe->pyramid());
+  }
+}
+
+void LocalMapping::cullRedundantKeyFrames(KeyFrame* keyframe) {
+  // A keyframe is redundant when 90 % of its points are seen by at least three
+  // other keyframes at the same or a finer scale.
+  constexpr int kObserversNeeded = 3;
+  for (KeyFrame* candidate : keyframe->orderedCovisibles()) {
+    if (candidate->id() == 0 || candidate->isBad()) continue;
+    int with_points = 0, redundant = 0;
+    for (size_t i = 0; i < candidate->size(); ++i) {
+      MapPoint* point = candidate->mapPoint(i);
+      if (!point || point->isBad()) continue;
+      ++with_points;
+      if (point->observationCount() <= kObserversNeeded) continue;
+      const int level = candidate->keypoints[i].octave;
+      int observers = 0;
+      for (const auto& [other, index] : point->observations()) {
+        if (other == candidate) continue;
+        if (other->keypoints[index].octave <= level + 1 && ++observers >= kObserversNeeded) break;
+      }
+      if (observers >= kObserversNeeded) ++redundant;
+    }
+    if (with_points > 0 && redundant > config_.mapping.redundant_keyframe_ratio * with_points) {
+      candidate->setBad();
+      ++culled_keyframes_;
+    }
+  }
+}
+
+}  // namespace vslam

@@ -1,0 +1,292 @@
+#include "vslam/slam/map_matching.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "vslam/feature/matcher.hpp"
+
+namespace vslam {
+namespace {
+
+// Wider windows for points seen obliquely: their appearance is less stable.
+double radiusByViewingCos(double view_cos) { return view_cos > 0.998 ? 2.5 : 4.0; }
+
+double angleDifferenceDeg(const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.angle - b.angle; }
+
+struct BestTwo {
+  int best_distance = std::numeric_limits<int>::max();
+  int second_distance = std::numeric_limits<int>::max();
+  int best_index = -1;
+  int best_level = -1, second_level = -1;
+  void offer(int distance, int index, int level) {
+    if (distance < best_distance) {
+      second_distance = best_distance;
+      second_level = best_level;
+      best_distance = distance;
+      best_index = index;
+      best_level = level;
+    } else if (distance < second_distance) {
+      second_distance = distance;
+      second_level = level;
+    }
+  }
+};
+
+}  // namespace
+
+int searchByProjection(Frame& current, const Frame& last, double radius_px, bool check_orientation) {
+  const PinholeCamera& camera = *current.camera;
+  const ScalePyramid& pyramid = *current.pyramid;
+  RotationHistogram rotation;
+  int matches = 0;
+  for (size_t i = 0; i < last.size(); ++i) {
+    MapPoint* point = last.map_points[i];
+    if (!point || point->isBad() || last.outlier[i]) continue;
+    const Vec3 p_c = current.T_cw * point->position();
+    if (p_c.z() <= 0) continue;
+    const Vec2 px = camera.project(p_c);
+    if (!camera.inImage(px)) continue;
+    const int last_level = last.keypoints[i].octave;
+    const double radius = radius_px * pyramid.scale[last_level];
+    const std::vector<int> candidates =
+        current.grid.featuresInArea(px.x(), px.y(), radius, std::max(0, last_level - 1), last_level + 1);
+    if (candidates.empty()) continue;
+    const uint8_t* descriptor = point->descriptor().ptr<uint8_t>();
+    BestTwo best;
+    for (int j : candidates) {
+      if (current.map_points[j] && current.map_points[j]->observationCount() > 0) continue;
+      best.offer(hammingDistance(descriptor, current.descriptors.ptr<uint8_t>(j)), j, current.keypoints[j].octave);
+    }
+    if (best.best_index < 0 || best.best_distance > kDescriptorHighThreshold) continue;
+    current.map_points[best.best_index] = point;
+    ++matches;
+    if (check_orientation)
+      rotation.add(best.best_index, angleDifferenceDeg(last.keypoints[i], current.keypoints[best.best_index]));
+  }
+  if (check_orientation)
+    for (int j : rotation.inconsistent()) {
+      current.map_points[j] = nullptr;
+      --matches;
+    }
+  return matches;
+}
+
+bool isInFrustum(MapPoint* point, const Frame& frame, double min_view_cos) {
+  point->track_in_view = false;
+  const Vec3 p_w = point->position();
+  const Vec3 p_c = frame.T_cw * p_w;
+  if (p_c.z() <= 0) return false;
+  const Vec2 px = frame.camera->project(p_c);
+  if (!frame.camera->inImage(px)) return false;
+  const Vec3 ray = p_w - frame.cameraCentre();
+  const double distance = ray.norm();
+  if (distance < point->minDistance() || distance > point->maxDistance()) return false;
+  const double view_cos = ray.dot(point->normal()) / distance;
+  if (view_cos < min_view_cos) return false;
+  point->track_in_view = true;
+  point->track_proj_x = px.x();
+  point->track_proj_y = px.y();
+  point->track_level = point->predictLevel(distance, *frame.pyramid);
+  point->track_view_cos = view_cos;
+  return true;
+}
+
+int searchLocalPoints(Frame& frame, const std::vector<MapPoint*>& points, double radius_factor) {
+  const ScalePyramid& pyramid = *frame.pyramid;
+  int matches = 0;
+  for (MapPoint* point : points) {
+    if (!point->track_in_view || point->isBad()) continue;
+    const int level = point->track_level;
+    const double radius = radius_factor * radiusByViewingCos(point->track_view_cos) * pyramid.scale[level];
+    const std::vector<int> candidates =
+        frame.grid.featuresInArea(point->track_proj_x, point->track_proj_y, radius, level - 1, level);
+    if (candidates.empty()) continue;
+    const uint8_t* descriptor = point->descriptor().ptr<uint8_t>();
+    BestTwo best;
+    for (int j : candidates) {
+      if (frame.map_points[j] && frame.map_points[j]->observationCount() > 0) continue;
+      best.offer(hammingDistance(descriptor, frame.descriptors.ptr<uint8_t>(j)), j, frame.keypoints[j].octave);
+    }
+    if (best.best_index < 0 || best.best_distance > kDescriptorHighThreshold) continue;
+    // Ambiguous when the runner-up at the same level is nearly as close.
+    if (best.best_level == best.second_level && best.best_distance > 0.8 * best.second_distance) continue;
+    frame.map_points[best.best_index] = point;
+    ++matches;
+  }
+  return matches;
+}
+
+int searchByProjection(Frame& frame, const KeyFrame& keyframe, const std::vector<MapPoint*>& already_found,
+                       double radius_px, int max_descriptor_distance) {
+  const PinholeCamera& camera = *frame.camera;
+  const ScalePyramid& pyramid = *frame.pyramid;
+  const Vec3 centre = frame.cameraCentre();
+  RotationHistogram rotation;
+  int matches = 0;
+  for (size_t i = 0; i < keyframe.size(); ++i) {
+    MapPoint* point = keyframe.mapPoint(i);
+    if (!point || point->isBad()) continue;
+    if (std::find(already_found.begin(), already_found.end(), point) != already_found.end()) continue;
+    const Vec3 p_c = frame.T_cw * point->position();
+    if (p_c.z() <= 0) continue;
+    const Vec2 px = camera.project(p_c);
+    if (!camera.inImage(px)) continue;
+    const double distance = (point->position() - centre).norm();
+    if (distance < point->minDistance() || distance > point->maxDistance()) continue;
+    const int level = point->predictLevel(distance, pyramid);
+    const std::vector<int> candidates =
+        frame.grid.featuresInArea(px.x(), px.y(), radius_px * pyramid.scale[level], level - 1, level + 1);
+    BestTwo best;
+    for (int j : candidates) {
+      if (frame.map_points[j]) continue;
+      best.offer(hammingDistance(point->descriptor().ptr<uint8_t>(), frame.descriptors.ptr<uint8_t>(j)), j,
+                 frame.keypoints[j].octave);
+    }
+    if (best.best_index < 0 || best.best_distance > max_descriptor_distance) continue;
+    frame.map_points[best.best_index] = point;
+    ++matches;
+    rotation.add(best.best_index, angleDifferenceDeg(keyframe.keypoints[i], frame.keypoints[best.best_index]));
+  }
+  for (int j : rotation.inconsistent()) {
+    frame.map_points[j] = nullptr;
+    --matches;
+  }
+  return matches;
+}
+
+int searchByDescriptor(const KeyFrame& keyframe, const Frame& frame, std::vector<MapPoint*>& matches, double ratio) {
+  matches.assign(frame.size(), nullptr);
+  std::vector<int> best_distance_at(frame.size(), std::numeric_limits<int>::max());
+  RotationHistogram rotation;
+  int count = 0;
+  for (size_t i = 0; i < keyframe.size(); ++i) {
+    MapPoint* point = keyframe.mapPoint(i);
+    if (!point || point->isBad()) continue;
+    const uint8_t* descriptor = keyframe.descriptors.ptr<uint8_t>(i);
+    BestTwo best;
+    for (size_t j = 0; j < frame.size(); ++j)
+      best.offer(hammingDistance(descriptor, frame.descriptors.ptr<uint8_t>(j)), static_cast<int>(j), 0);
+    if (best.best_index < 0 || best.best_distance > kDescriptorLowThreshold) continue;
+    if (best.best_distance >= ratio * best.second_distance) continue;
+    if (best.best_distance >= best_distance_at[best.best_index]) continue;
+    if (!matches[best.best_index]) ++count;
+    matches[best.best_index] = point;
+    best_distance_at[best.best_index] = best.best_distance;
+    rotation.add(best.best_index, angleDifferenceDeg(keyframe.keypoints[i], frame.keypoints[best.best_index]));
+  }
+  for (int j : rotation.inconsistent())
+    if (matches[j]) {
+      matches[j] = nullptr;
+      --count;
+    }
+  return count;
+}
+
+int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius_factor) {
+  const PinholeCamera& camera = keyframe->camera();
+  const ScalePyramid& pyramid = keyframe->pyramid();
+  const SE3& T_cw = keyframe->pose();
+  const Vec3 centre = keyframe->cameraCentre();
+  int fused = 0;
+  for (MapPoint* point : points) {
+    if (!point || point->isBad() || point->keypointIn(keyframe) >= 0) continue;
+    const Vec3 p_c = T_cw * point->position();
+    if (p_c.z() <= 0) continue;
+    const Vec2 px = camera.project(p_c);
+    if (!camera.inImage(px)) continue;
+    const Vec3 ray = point->position() - centre;
+    const double distance = ray.norm();
+    if (distance < point->minDistance() || distance > point->maxDistance()) continue;
+    if (ray.dot(point->normal()) < 0.5 * distance) continue;
+    const int level = point->predictLevel(distance, pyramid);
+    const double radius = radius_factor * pyramid.scale[level];
+    const std::vector<int> candidates = keyframe->grid.featuresInArea(px.x(), px.y(), radius);
+    int best_distance = std::numeric_limits<int>::max();
+    int best_index = -1;
+    for (int j : candidates) {
+      const int kp_level = keyframe->keypoints[j].octave;
+      if (kp_level < level - 1 || kp_level > level) continue;
+      // Reprojection gate at the keypoint's scale (chi-square 2 dof, 95 %).
+      const double e2 = (keyframe->points[j] - px).squaredNorm();
+      if (e2 * pyramid.inv_sigma2[kp_level] > 5.99) continue;
+      const int d = hammingDistance(point->descriptor().ptr<uint8_t>(), keyframe->descriptors.ptr<uint8_t>(j));
+      if (d < best_distance) {
+        best_distance = d;
+        best_index = j;
+      }
+    }
+    if (best_index < 0 || best_distance > kDescriptorLowThreshold) continue;
+    MapPoint* existing = keyframe->mapPoint(best_index);
+    if (existing && !existing->isBad()) {
+      if (existing->observationCount() > point->observationCount())
+        point->replaceWith(existing);
+      else
+        existing->replaceWith(point);
+    } else {
+      point->addObservation(keyframe, best_index);
+      keyframe->setMapPoint(best_index, point);
+    }
+    ++fused;
+  }
+  return fused;
+}
+
+}  // namespace vslam
+
+namespace vslam {
+
+std::vector<std::pair<int, int>> searchForTriangulation(const KeyFrame& kf1, const KeyFrame& kf2, const Mat3& F12) {
+  const ScalePyramid& pyramid = kf1.pyramid();
+  // The epipole: kf1's centre seen in kf2. Points next to it have degenerate depth.
+  const Vec3 C1_in_2 = kf2.pose() * kf1.cameraCentre();
+  const Vec2 epipole = kf2.camera().project(C1_in_2);
+  const bool epipole_valid = C1_in_2.z() > 0;
+
+  std::vector<int> best_for_2(kf2.size(), -1);
+  std::vector<int> best_distance_2(kf2.size(), kDescriptorLowThreshold + 1);
+  std::vector<int> match_of_1(kf1.size(), -1);
+  RotationHistogram rotation;
+  for (size_t i1 = 0; i1 < kf1.size(); ++i1) {
+    if (kf1.mapPoint(i1)) continue;
+    const uint8_t* d1 = kf1.descriptors.ptr<uint8_t>(i1);
+    const Vec3 x1 = kf1.points[i1].homogeneous();
+    // Epipolar line in image 2 of keypoint i1: l2 = F12' x1.
+    const Vec3 line = F12.transpose() * x1;
+    const double line_norm2 = line.x() * line.x() + line.y() * line.y();
+    if (line_norm2 <= 0) continue;
+    int best_distance = kDescriptorLowThreshold + 1;
+    int best_index = -1;
+    for (size_t i2 = 0; i2 < kf2.size(); ++i2) {
+      if (kf2.mapPoint(i2)) continue;
+      const int distance = hammingDistance(d1, kf2.descriptors.ptr<uint8_t>(i2));
+      if (distance >= best_distance) continue;
+      const Vec2& p2 = kf2.points[i2];
+      const int level2 = kf2.keypoints[i2].octave;
+      if (epipole_valid && (p2 - epipole).squaredNorm() < 100 * pyramid.scale[level2]) continue;
+      const double d = line.x() * p2.x() + line.y() * p2.y() + line.z();
+      // Distance to the epipolar line within the chi-square 1-dof bound at kf2's keypoint scale.
+      if (d * d / line_norm2 >= 3.84 * pyramid.sigma2[level2]) continue;
+      best_distance = distance;
+      best_index = static_cast<int>(i2);
+    }
+    if (best_index < 0) continue;
+    // Keep one-to-one: the better claimant of a kf2 keypoint wins.
+    if (best_distance >= best_distance_2[best_index]) continue;
+    if (best_for_2[best_index] >= 0) match_of_1[best_for_2[best_index]] = -1;
+    best_for_2[best_index] = static_cast<int>(i1);
+    best_distance_2[best_index] = best_distance;
+    match_of_1[i1] = best_index;
+  }
+  for (size_t i1 = 0; i1 < kf1.size(); ++i1)
+    if (match_of_1[i1] >= 0)
+      rotation.add(static_cast<int>(i1), kf1.keypoints[i1].angle - kf2.keypoints[match_of_1[i1]].angle);
+  for (int i1 : rotation.inconsistent()) match_of_1[i1] = -1;
+
+  std::vector<std::pair<int, int>> matches;
+  for (size_t i1 = 0; i1 < kf1.size(); ++i1)
+    if (match_of_1[i1] >= 0) matches.emplace_back(static_cast<int>(i1), match_of_1[i1]);
+  return matches;
+}
+
+}  // namespace vslam

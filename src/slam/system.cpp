@@ -1,0 +1,110 @@
+#include "vslam/slam/system.hpp"
+
+#include "vslam/map/map.hpp"
+#include "vslam/slam/frame_builder.hpp"
+#include "vslam/slam/local_mapping.hpp"
+#include "vslam/slam/tracking.hpp"
+
+namespace vslam {
+
+System::System(const Config& config, const SystemOptions& options)
+    : config_(config),
+      options_(options),
+      map_(std::make_unique<Map>()),
+      frame_builder_(std::make_unique<FrameBuilder>(config, config.camera)),
+      local_mapping_(std::make_unique<LocalMapping>(config, *map_, &timer_)),
+      tracking_(std::make_unique<Tracking>(config, *map_, *local_mapping_, &timer_, options.deterministic)) {
+  if (!options_.deterministic) local_mapping_->start();
+}
+
+System::~System() { finish(); }
+
+bool System::processFrame(int index, double timestamp, const cv::Mat& image, const cv::Mat& depth_m) {
+  ScopedStage total(&timer_, "frame");
+  Frame frame;
+  {
+    ScopedStage stage(&timer_, "extract");
+    frame = frame_builder_->build(next_frame_id_++, index, timestamp, image, depth_m);
+  }
+  ScopedStage stage(&timer_, "track");
+  return tracking_->track(frame);
+}
+
+void System::finish() {
+  if (finished_) return;
+  finished_ = true;
+  if (options_.deterministic)
+    local_mapping_->processQueued();
+  else
+    local_mapping_->finish();
+}
+
+std::vector<StampedPose> System::frameTrajectory() const {
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  std::vector<StampedPose> trajectory;
+  for (const FrameRecord& record : tracking_->records()) {
+    if (!record.tracked || !record.reference) continue;
+    // Follow culled reference keyframes up the spanning tree.
+    KeyFrame* reference = record.reference;
+    SE3 T_c_ref = record.T_c_ref;
+    while (reference->isBad() && reference->parent()) {
+      T_c_ref = T_c_ref * reference->poseRelativeToParent();
+      reference = reference->parent();
+    }
+    const SE3 T_cw = T_c_ref * reference->pose();
+    trajectory.push_back({record.timestamp, T_cw.inverse()});
+  }
+  return trajectory;
+}
+
+std::vector<StampedPose> System::keyframeTrajectory() const {
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  std::vector<StampedPose> trajectory;
+  for (KeyFrame* keyframe : map_->keyframes()) trajectory.push_back({keyframe->timestamp(), keyframe->pose().inverse()});
+  std::sort(trajectory.begin(), trajectory.end(),
+            [](const StampedPose& a, const StampedPose& b) { return a.timestamp < b.timestamp; });
+  return trajectory;
+}
+
+std::vector<int> System::lostFrameIndices() const {
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  std::vector<int> lost;
+  for (const FrameRecord& record : tracking_->records())
+    if (!record.tracked) lost.push_back(record.index);
+  return lost;
+}
+
+std::vector<ExportedMapPoint> System::mapPoints() const {
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  std::vector<ExportedMapPoint> points;
+  for (MapPoint* point : map_->mapPoints())
+    points.push_back({point->id(), point->position(), point->colour(), point->classId(), point->observationCount()});
+  return points;
+}
+
+std::vector<ExportedKeyFrame> System::keyFrames() const {
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  std::vector<ExportedKeyFrame> keyframes;
+  for (KeyFrame* keyframe : map_->keyframes())
+    keyframes.push_back({keyframe->id(), keyframe->frameIndex(), keyframe->timestamp(), keyframe->pose().inverse()});
+  return keyframes;
+}
+
+SystemStats System::stats() const {
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  SystemStats stats;
+  for (const FrameRecord& record : tracking_->records()) {
+    ++stats.frames;
+    if (record.tracked) ++stats.frames_tracked;
+  }
+  stats.keyframes = static_cast<int>(map_->keyframeCount());
+  stats.map_points = static_cast<int>(map_->mapPointCount());
+  stats.initialised_at_index = tracking_->initialisedAtIndex();
+  stats.local_bundle_adjustments = local_mapping_->localBundleAdjustments();
+  stats.culled_keyframes = local_mapping_->culledKeyFrames();
+  return stats;
+}
+
+int System::lastTrackedPoints() const { return tracking_->lastTrackedPoints(); }
+
+}  // namespace vslam

@@ -1,0 +1,441 @@
+#include "vslam/slam/tracking.hpp"
+
+#include <algorithm>
+#include <map>
+
+#include <spdlog/spdlog.h>
+
+#include "vslam/feature/matcher.hpp"
+#include "vslam/geometry/two_view_initializer.hpp"
+#include "vslam/optimize/bundle_adjuster.hpp"
+#include "vslam/optimize/pose_optimizer.hpp"
+#include "vslam/slam/local_mapping.hpp"
+#include "vslam/slam/map_matching.hpp"
+
+namespace vslam {
+namespace {
+
+constexpr int kInitMinKeypoints = 100;
+constexpr int kInitMinMatches = 100;
+constexpr double kInitWindowPx = 100.0;
+constexpr double kProjectionRadiusPx = 15.0;  // monocular search window around the predicted position
+constexpr size_t kMaxLocalKeyFrames = 80;
+
+}  // namespace
+
+Tracking::Tracking(const Config& config, Map& map, LocalMapping& local_mapping, StageTimer* timer, bool deterministic)
+    : config_(config), map_(map), local_mapping_(local_mapping), timer_(timer), deterministic_(deterministic) {}
+
+bool Tracking::track(Frame& frame) {
+  FrameRecord record;
+  record.frame_id = frame.id;
+  record.index = frame.index;
+  record.timestamp = frame.timestamp;
+
+  if (state_ == TrackingState::NotInitialized) {
+    initialise(frame);
+    if (state_ != TrackingState::Ok) {
+      records_.push_back(record);
+      return false;
+    }
+    // The initialising frame is now keyframe 1: record it and continue with the next frame.
+    record.tracked = true;
+    record.reference = last_keyframe_;
+    record.T_c_ref = SE3();
+    records_.push_back(record);
+    return true;
+  }
+
+  std::unique_lock<std::mutex> lock(map_.mutex());
+  bool ok = false;
+  if (state_ == TrackingState::Ok) {
+    if (velocity_ && last_frame_) ok = trackWithMotionModel(frame);
+    if (!ok) ok = trackReferenceKeyFrame(frame);
+  } else {
+    // Lost: try the reference keyframe and the most recent keyframes (relocalisation
+    // proper comes with the place-recognition module).
+    ok = trackReferenceKeyFrame(frame);
+    if (ok) last_relocalisation_frame_id_ = frame.id;
+  }
+  if (ok) ok = trackLocalMap(frame);
+
+  if (ok) {
+    state_ = TrackingState::Ok;
+    if (last_frame_ && last_frame_->has_pose)
+      velocity_ = frame.T_cw * last_frame_->T_cw.inverse();
+    else
+      velocity_.reset();
+    if (needNewKeyFrame(frame)) createKeyFrame(frame);
+    // Outliers must not be projected into the next frame.
+    for (size_t i = 0; i < frame.size(); ++i)
+      if (frame.outlier[i]) frame.map_points[i] = nullptr;
+  } else {
+    state_ = TrackingState::Lost;
+    velocity_.reset();
+    frame.has_pose = false;
+    spdlog::warn("frame {} (t={:.3f}): tracking lost", frame.index, frame.timestamp);
+  }
+
+  last_tracked_points_ = ok ? matches_inliers_ : 0;
+  if (ok && reference_keyframe_) {
+    record.tracked = true;
+    record.reference = reference_keyframe_;
+    record.T_c_ref = frame.T_cw * reference_keyframe_->pose().inverse();
+  }
+  records_.push_back(record);
+  lock.unlock();
+
+  if (deterministic_) local_mapping_.processQueued();
+
+  // Early failure: a map of a handful of keyframes is not worth keeping.
+  if (!ok && map_.keyframeCount() <= 5) {
+    spdlog::warn("tracking lost soon after initialisation: resetting the map");
+    resetMap();
+  }
+  last_frame_ = frame;
+  last_frame_->has_pose = ok;
+  return ok;
+}
+
+void Tracking::initialise(Frame& frame) {
+  if (!init_reference_) {
+    if (static_cast<int>(frame.size()) > kInitMinKeypoints) {
+      init_reference_ = std::make_unique<Frame>(frame);
+      init_prev_matched_ = frame.points;
+    }
+    return;
+  }
+  if (static_cast<int>(frame.size()) <= kInitMinKeypoints) {
+    init_reference_.reset();
+    return;
+  }
+  const Frame& reference = *init_reference_;
+  std::vector<int> matches_ref_cur;
+  const int n_matches = matchInWindow(reference.keypoints, reference.descriptors, frame.keypoints, frame.descriptors,
+                                      frame.grid, init_prev_matched_, kInitWindowPx, matches_ref_cur);
+  if (n_matches < kInitMinMatches) {
+    // Too little overlap: start again from this frame.
+    init_reference_ = std::make_unique<Frame>(frame);
+    init_prev_matched_ = frame.points;
+    return;
+  }
+  for (size_t i = 0; i < matches_ref_cur.size(); ++i)
+    if (matches_ref_cur[i] >= 0) init_prev_matched_[i] = frame.points[matches_ref_cur[i]];
+
+  std::vector<Vec2> pts_ref, pts_cur;
+  std::vector<std::pair<int, int>> pairs;
+  for (size_t i = 0; i < matches_ref_cur.size(); ++i) {
+    if (matches_ref_cur[i] < 0) continue;
+    pts_ref.push_back(reference.points[i]);
+    pts_cur.push_back(frame.points[matches_ref_cur[i]]);
+    pairs.emplace_back(static_cast<int>(i), matches_ref_cur[i]);
+  }
+  const TwoViewInitializer initializer(frame.camera->Keigen(), config_.initializer);
+  const TwoViewResult result = initializer.initialize(pts_ref, pts_cur);
+  if (!result.success) {
+    spdlog::debug("frame {}: initialisation failed: {}", frame.index, result.failure_reason);
+    return;
+  }
+
+  std::lock_guard<std::mutex> lock(map_.mutex());
+  Frame ref_frame = reference;
+  ref_frame.T_cw = SE3();
+  ref_frame.has_pose = true;
+  frame.T_cw = result.T_cur_ref;
+  frame.has_pose = true;
+  ref_frame.map_points.assign(ref_frame.size(), nullptr);
+  frame.map_points.assign(frame.size(), nullptr);
+  KeyFrame* kf_ref = map_.createKeyFrame(ref_frame);
+  KeyFrame* kf_cur = map_.createKeyFrame(frame);
+  for (size_t m = 0; m < pairs.size(); ++m) {
+    if (!result.triangulated[m]) continue;
+    const auto [i_ref, i_cur] = pairs[m];
+    MapPoint* point = map_.createMapPoint(result.points_ref[m], kf_ref);
+    point->addObservation(kf_ref, i_ref);
+    point->addObservation(kf_cur, i_cur);
+    kf_ref->setMapPoint(i_ref, point);
+    kf_cur->setMapPoint(i_cur, point);
+    point->setColour(kf_ref->colours[i_ref]);
+    point->updateDescriptor();
+    point->updateNormalAndDepth(*frame.pyramid);
+    point->updateClass();
+  }
+  kf_ref->updateConnections();
+  kf_cur->updateConnections();
+
+  // Two-view bundle adjustment, first keyframe fixed.
+  BundleProblem problem;
+  problem.keyframes = {{kf_ref->id(), kf_ref->pose(), true}, {kf_cur->id(), kf_cur->pose(), false}};
+  std::vector<MapPoint*> points = map_.mapPoints();
+  for (size_t p = 0; p < points.size(); ++p) {
+    problem.points.push_back({points[p]->id(), points[p]->position(), false});
+    int k = 0;
+    for (KeyFrame* kf : {kf_ref, kf_cur}) {
+      const int idx = points[p]->keypointIn(kf);
+      problem.observations.push_back(
+          {k, static_cast<int>(p), kf->points[idx], frame.pyramid->inv_sigma2[kf->keypoints[idx].octave]});
+      ++k;
+    }
+  }
+  BundleOptions options;
+  options.iterations_first = 20;
+  options.iterations_second = 0;
+  options.remove_outliers = false;
+  bundleAdjust(*frame.camera, 0.0, problem, options);
+  kf_cur->setPose(problem.keyframes[1].T_cw);
+  for (size_t p = 0; p < points.size(); ++p) points[p]->setPosition(problem.points[p].position_w);
+
+  // Scale the map so the first keyframe's median scene depth is 1.
+  const double median_depth = kf_ref->medianSceneDepth();
+  if (median_depth <= 0 || kf_cur->trackedMapPoints(1) < kInitMinKeypoints) {
+    spdlog::info("frame {}: initialisation rejected (median depth {:.3f}, {} points)", frame.index, median_depth,
+                 kf_cur->trackedMapPoints(1));
+    map_.clear();
+    return;
+  }
+  const double inv_depth = 1.0 / median_depth;
+  SE3 T_cur = kf_cur->pose();
+  T_cur.t *= inv_depth;
+  kf_cur->setPose(T_cur);
+  for (MapPoint* point : points) {
+    point->setPosition(point->position() * inv_depth);
+    point->updateNormalAndDepth(*frame.pyramid);
+  }
+
+  spdlog::info("map initialised at frame {} from frame {} with {} points ({}, score ratio {:.2f}, parallax {:.1f} deg)",
+               frame.index, reference.index, points.size(), result.used_homography ? "homography" : "fundamental",
+               result.score_ratio, result.median_parallax_deg);
+
+  // The reference frame was never recorded as tracked: it is keyframe 0.
+  for (FrameRecord& record : records_)
+    if (record.frame_id == reference.id) {
+      record.tracked = true;
+      record.reference = kf_ref;
+      record.T_c_ref = SE3();
+    }
+
+  local_mapping_.insertKeyFrame(kf_ref);
+  local_mapping_.insertKeyFrame(kf_cur);
+  frame.T_cw = kf_cur->pose();
+  for (size_t i = 0; i < frame.size(); ++i) frame.map_points[i] = kf_cur->mapPoint(i);
+  frame.outlier.assign(frame.size(), false);
+  last_frame_ = frame;
+  last_frame_->has_pose = true;
+  velocity_.reset();
+  reference_keyframe_ = kf_cur;
+  last_keyframe_ = kf_cur;
+  last_keyframe_frame_id_ = frame.id;
+  local_keyframes_ = {kf_ref, kf_cur};
+  local_points_ = points;
+  keyframes_created_ = 2;
+  initialised_at_index_ = frame.index;
+  state_ = TrackingState::Ok;
+  init_reference_.reset();
+}
+
+int Tracking::optimisePose(Frame& frame) {
+  std::vector<Vec3> points_w;
+  std::vector<Observation2D> observations;
+  std::vector<int> keypoint_of;
+  for (size_t i = 0; i < frame.size(); ++i) {
+    MapPoint* point = frame.map_points[i];
+    if (!point) continue;
+    keypoint_of.push_back(static_cast<int>(i));
+    observations.push_back({static_cast<int>(points_w.size()), frame.points[i],
+                            frame.pyramid->inv_sigma2[frame.keypoints[i].octave]});
+    points_w.push_back(point->position());
+  }
+  frame.outlier.assign(frame.size(), false);
+  if (observations.size() < 3) return 0;
+  const PoseOptimizationResult result = optimizePose(*frame.camera, 0.0, frame.T_cw, points_w, observations);
+  frame.T_cw = result.T_cw;
+  frame.has_pose = true;
+  for (size_t k = 0; k < keypoint_of.size(); ++k)
+    if (!result.inlier[k]) frame.outlier[keypoint_of[k]] = true;
+  return result.n_inliers;
+}
+
+// Drops outlier matches after pose optimisation and counts what is left.
+static int discardOutliers(Frame& frame) {
+  int kept = 0;
+  for (size_t i = 0; i < frame.size(); ++i) {
+    if (!frame.map_points[i]) continue;
+    if (frame.outlier[i]) {
+      MapPoint* point = frame.map_points[i];
+      frame.map_points[i] = nullptr;
+      frame.outlier[i] = false;
+      point->track_in_view = false;
+      point->last_frame_seen = frame.id;
+    } else if (frame.map_points[i]->observationCount() > 0) {
+      ++kept;
+    }
+  }
+  return kept;
+}
+
+bool Tracking::trackWithMotionModel(Frame& frame) {
+  frame.T_cw = *velocity_ * last_frame_->T_cw;
+  frame.map_points.assign(frame.size(), nullptr);
+  int matches = searchByProjection(frame, *last_frame_, kProjectionRadiusPx);
+  if (matches < 20) {
+    frame.map_points.assign(frame.size(), nullptr);
+    matches = searchByProjection(frame, *last_frame_, 2 * kProjectionRadiusPx);
+  }
+  if (matches < 20) return false;
+  optimisePose(frame);
+  return discardOutliers(frame) >= 10;
+}
+
+bool Tracking::trackReferenceKeyFrame(Frame& frame) {
+  KeyFrame* reference = reference_keyframe_ ? reference_keyframe_ : last_keyframe_;
+  if (!reference || reference->isBad()) {
+    const auto keyframes = map_.keyframes();
+    if (keyframes.empty()) return false;
+    reference = keyframes.back();
+  }
+  std::vector<MapPoint*> matches;
+  if (searchByDescriptor(*reference, frame, matches) < 15) return false;
+  frame.map_points = matches;
+  frame.T_cw = last_frame_ && last_frame_->has_pose ? last_frame_->T_cw : reference->pose();
+  optimisePose(frame);
+  return discardOutliers(frame) >= 10;
+}
+
+void Tracking::updateLocalMap(Frame& frame) {
+  // Keyframes that see the frame's points, voting by how many they see.
+  std::map<KeyFrame*, int> votes;
+  for (size_t i = 0; i < frame.size(); ++i) {
+    MapPoint* point = frame.map_points[i];
+    if (!point) continue;
+    if (point->isBad()) {
+      frame.map_points[i] = nullptr;
+      continue;
+    }
+    for (const auto& [keyframe, index] : point->observations()) ++votes[keyframe];
+  }
+  local_keyframes_.clear();
+  KeyFrame* best = nullptr;
+  int best_votes = 0;
+  for (const auto& [keyframe, count] : votes) {
+    if (keyframe->isBad()) continue;
+    if (count > best_votes || (count == best_votes && best && keyframe->id() < best->id())) {
+      best_votes = count;
+      best = keyframe;
+    }
+    local_keyframes_.push_back(keyframe);
+    keyframe->track_local_for_frame = frame.id;
+  }
+  // Their neighbours, children and parents widen the local map.
+  const size_t direct = local_keyframes_.size();
+  for (size_t k = 0; k < direct && local_keyframes_.size() < kMaxLocalKeyFrames; ++k) {
+    KeyFrame* keyframe = local_keyframes_[k];
+    auto add = [&](KeyFrame* other) {
+      if (!other || other->isBad() || other->track_local_for_frame == frame.id) return false;
+      other->track_local_for_frame = frame.id;
+      local_keyframes_.push_back(other);
+      return true;
+    };
+    for (KeyFrame* neighbour : keyframe->bestCovisibles(10))
+      if (add(neighbour)) break;
+    for (KeyFrame* child : keyframe->children())
+      if (add(child)) break;
+    add(keyframe->parent());
+  }
+  if (best) reference_keyframe_ = best;
+
+  local_points_.clear();
+  for (KeyFrame* keyframe : local_keyframes_)
+    for (MapPoint* point : keyframe->mapPoints()) {
+      if (!point || point->isBad() || point->track_reference_frame == frame.id) continue;
+      point->track_reference_frame = frame.id;
+      local_points_.push_back(point);
+    }
+}
+
+bool Tracking::trackLocalMap(Frame& frame) {
+  updateLocalMap(frame);
+  // Points already matched are not searched again.
+  for (size_t i = 0; i < frame.size(); ++i) {
+    MapPoint* point = frame.map_points[i];
+    if (!point) continue;
+    point->increaseVisible();
+    point->last_frame_seen = frame.id;
+    point->track_in_view = false;
+  }
+  int to_match = 0;
+  for (MapPoint* point : local_points_) {
+    if (point->last_frame_seen == frame.id || point->isBad()) continue;
+    if (isInFrustum(point, frame)) {
+      point->increaseVisible();
+      ++to_match;
+    }
+  }
+  if (to_match > 0) {
+    const bool just_relocalised = last_relocalisation_frame_id_ >= 0 && frame.id < last_relocalisation_frame_id_ + 2;
+    searchLocalPoints(frame, local_points_, just_relocalised ? 5.0 : 1.0);
+  }
+  optimisePose(frame);
+
+  matches_inliers_ = 0;
+  for (size_t i = 0; i < frame.size(); ++i) {
+    MapPoint* point = frame.map_points[i];
+    if (!point || frame.outlier[i]) continue;
+    point->increaseFound();
+    if (point->observationCount() > 0) ++matches_inliers_;
+  }
+  const bool recently_relocalised =
+      last_relocalisation_frame_id_ >= 0 &&
+      frame.id < last_relocalisation_frame_id_ + config_.tracking.max_frames_between_keyframes;
+  return matches_inliers_ >= (recently_relocalised ? 50 : config_.tracking.min_inliers);
+}
+
+bool Tracking::needNewKeyFrame(const Frame& frame) const {
+  if (!reference_keyframe_) return false;
+  const TrackingParams& params = config_.tracking;
+  const int keyframes_in_map = static_cast<int>(map_.keyframeCount());
+  const int min_observations = keyframes_in_map <= 2 ? 2 : 3;
+  const int reference_points = reference_keyframe_->trackedMapPoints(min_observations);
+  const long frames_since = frame.id - last_keyframe_frame_id_;
+
+  // The paper's rule: at least 20 frames since the last keyframe or fewer than
+  // 100 tracked points, and fewer than 90 % of the reference keyframe's points tracked.
+  const bool enough_time_or_weak = frames_since >= params.max_frames_between_keyframes ||
+                                   matches_inliers_ < params.min_tracked_points;
+  const bool new_content = matches_inliers_ < params.ref_ratio * reference_points && matches_inliers_ > 15;
+  if (!(enough_time_or_weak && new_content)) return false;
+  // Local Mapping must be ready to take it; otherwise ask it to wrap up its BA.
+  if (local_mapping_.acceptsKeyFrames()) return true;
+  local_mapping_.interruptBundleAdjustment();
+  return deterministic_;  // in deterministic mode the mapper always catches up before the next frame
+}
+
+void Tracking::createKeyFrame(Frame& frame) {
+  KeyFrame* keyframe = map_.createKeyFrame(frame);
+  reference_keyframe_ = keyframe;
+  last_keyframe_ = keyframe;
+  last_keyframe_frame_id_ = frame.id;
+  ++keyframes_created_;
+  local_mapping_.insertKeyFrame(keyframe);
+}
+
+void Tracking::resetMap() {
+  local_mapping_.reset();
+  std::lock_guard<std::mutex> lock(map_.mutex());
+  // Keyframes of the failed map no longer exist as references for the trajectory.
+  for (FrameRecord& record : records_) {
+    record.tracked = false;
+    record.reference = nullptr;
+  }
+  local_keyframes_.clear();
+  local_points_.clear();
+  reference_keyframe_ = nullptr;
+  last_keyframe_ = nullptr;
+  last_frame_.reset();
+  velocity_.reset();
+  keyframes_created_ = 0;
+  initialised_at_index_ = -1;
+  state_ = TrackingState::NotInitialized;
+  map_.clear();
+}
+
+}  // namespace vslam

@@ -1,0 +1,225 @@
+#include "run_slam.hpp"
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <ctime>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "vslam/eval/ate.hpp"
+#include "vslam/io/ply.hpp"
+#include "vslam/io/trajectory_io.hpp"
+#include "vslam/slam/system.hpp"
+
+namespace vslam::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct LoadedFrame {
+  size_t position = 0;
+  cv::Mat image;
+  cv::Mat depth;
+  std::string error;
+};
+
+// Reads images on a separate thread, a few frames ahead, so Tracking never
+// waits on JPEG decoding (the run goes as fast as frames can be processed).
+class FramePrefetcher {
+ public:
+  FramePrefetcher(const Sequence& sequence, size_t begin, size_t end, bool with_depth)
+      : sequence_(sequence), next_(begin), end_(end), with_depth_(with_depth) {
+    thread_ = std::thread([this] { run(); });
+  }
+  ~FramePrefetcher() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+  bool next(LoadedFrame& out) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    cv_.wait(lock, [this] { return !queue_.empty() || done_; });
+    if (queue_.empty()) return false;
+    out = std::move(queue_.front());
+    queue_.pop_front();
+    cv_.notify_all();
+    return true;
+  }
+
+ private:
+  void run() {
+    for (size_t i = next_; i < end_; ++i) {
+      LoadedFrame frame;
+      frame.position = i;
+      try {
+        frame.image = sequence_.loadColor(i);
+        if (with_depth_) frame.depth = sequence_.loadDepthMeters(i);
+      } catch (const std::exception& e) {
+        frame.error = e.what();
+      }
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait(lock, [this] { return queue_.size() < kAhead || stop_; });
+      if (stop_) break;
+      const bool failed = !frame.error.empty();
+      queue_.push_back(std::move(frame));
+      cv_.notify_all();
+      if (failed) break;
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    done_ = true;
+    cv_.notify_all();
+  }
+
+  static constexpr size_t kAhead = 4;
+  const Sequence& sequence_;
+  size_t next_, end_;
+  bool with_depth_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<LoadedFrame> queue_;
+  bool stop_ = false, done_ = false;
+  std::thread thread_;
+};
+
+double peakRssMb() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  return 0.0;
+}
+
+std::string defaultOutDir(const std::string& sequence_name) {
+  std::string name = sequence_name;
+  for (char& c : name)
+    if (c == '/' || c == ' ') c = '_';
+  while (!name.empty() && name.front() == '_') name.erase(name.begin());
+  const std::time_t now = std::time(nullptr);
+  char stamp[32];
+  std::strftime(stamp, sizeof(stamp), "%Y%m%d-%H%M%S", std::localtime(&now));
+  return "runs/" + name + "-" + stamp;
+}
+
+nlohmann::json ateJson(const std::vector<StampedPose>& estimate, const Sequence& sequence, bool mono) {
+  AteOptions options;
+  options.alignment = mono ? Alignment::Sim3 : Alignment::SE3;
+  options.association = Association::Timestamp;
+  const AteResult result = computeAte(estimate, sequence.groundtruth, options);
+  return toJson(result);
+}
+
+}  // namespace
+
+int runSlam(const Sequence& sequence, const RunOptions& options) {
+  const bool mono = options.mode == "mono";
+  if (!mono && !sequence.hasDepth())
+    throw InputError(sequence.root, 0, "--mode rgbd needs depth images (depth.txt), and this sequence has none");
+  const std::string out_dir = options.out_dir.empty() ? defaultOutDir(sequence.name) : options.out_dir;
+  fs::create_directories(out_dir);
+
+  const size_t begin = std::min<size_t>(options.start_frame, sequence.frames.size());
+  size_t end = sequence.frames.size();
+  if (options.max_frames > 0) end = std::min(end, begin + options.max_frames);
+
+  SystemOptions system_options;
+  system_options.deterministic = options.deterministic;
+  System system(sequence.config, system_options);
+
+  spdlog::info("running {} ({} frames, {}, {}) into {}", sequence.name, end - begin, options.mode,
+               options.deterministic ? "deterministic" : "threaded", out_dir);
+  const auto start = std::chrono::steady_clock::now();
+  {
+    FramePrefetcher prefetcher(sequence, begin, end, !mono);
+    LoadedFrame loaded;
+    size_t processed = 0;
+    while (prefetcher.next(loaded)) {
+      if (!loaded.error.empty()) throw InputError(loaded.error);
+      const FrameEntry& entry = sequence.frames[loaded.position];
+      system.processFrame(entry.index, entry.timestamp, loaded.image, loaded.depth);
+      ++processed;
+      if (processed % 50 == 0 || processed == end - begin) {
+        const SystemStats stats = system.stats();
+        const double elapsed =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        spdlog::info("frame {}/{}: tracked {}, keyframes {}, map points {}, {:.1f} fps", processed, end - begin,
+                     stats.frames_tracked, stats.keyframes, stats.map_points, processed / elapsed);
+      }
+    }
+  }
+  system.finish();
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  const std::vector<StampedPose> trajectory = system.frameTrajectory();
+  const std::vector<StampedPose> keyframes = system.keyframeTrajectory();
+  writeTumTrajectory(out_dir + "/trajectory.txt", trajectory);
+  writeTumTrajectory(out_dir + "/keyframes.txt", keyframes);
+
+  std::vector<PlyPoint> cloud;
+  for (const ExportedMapPoint& point : system.mapPoints()) cloud.push_back({point.position, point.bgr, point.class_id});
+  writeMapPly(out_dir + "/map.ply", cloud);
+
+  const SystemStats stats = system.stats();
+  const std::vector<int> lost = system.lostFrameIndices();
+  nlohmann::json report;
+  report["sequence"] = sequence.name;
+  report["sequence_root"] = sequence.root;
+  report["mode"] = options.mode;
+  report["deterministic"] = options.deterministic;
+  report["camera"] = sequence.config.camera.name;
+  report["frames_total"] = stats.frames;
+  report["frames_tracked"] = static_cast<int>(trajectory.size());
+  report["frames_lost"] = lost;
+  report["initialised_at_frame"] = stats.initialised_at_index;
+  report["keyframes"] = stats.keyframes;
+  report["map_points"] = stats.map_points;
+  report["local_bundle_adjustments"] = stats.local_bundle_adjustments;
+  report["culled_keyframes"] = stats.culled_keyframes;
+  report["groundtruth_file"] = sequence.groundtruth_path;
+  if (sequence.hasGroundTruth() && !keyframes.empty()) {
+    report["ate"]["keyframes"] = ateJson(keyframes, sequence, mono);
+    report["ate"]["frames"] = ateJson(trajectory, sequence, mono);
+  } else {
+    report["ate"] = nullptr;
+  }
+  nlohmann::json stage_ms;
+  for (const auto& [stage, s] : system.timer().summary())
+    stage_ms[stage] = {{"median", s.median_ms}, {"p95", s.p95_ms}, {"mean", s.mean_ms}, {"count", s.count}};
+  report["stage_ms"] = stage_ms;
+  report["wall_s"] = wall_s;
+  report["fps"] = wall_s > 0 ? stats.frames / wall_s : 0.0;
+  report["peak_rss_mb"] = peakRssMb();
+  std::ofstream(out_dir + "/report.json") << report.dump(2) << "\n";
+
+  // Summary on stdout.
+  std::cout << "sequence: " << sequence.name << " (" << options.mode << ")\n";
+  std::cout << "frames tracked: " << trajectory.size() << " / " << stats.frames;
+  if (stats.initialised_at_index >= 0) std::cout << " (initialised at frame " << stats.initialised_at_index << ")";
+  std::cout << "\nkeyframes: " << stats.keyframes << ", map points: " << stats.map_points << "\n";
+  if (report["ate"].is_object()) {
+    std::printf("ATE RMSE keyframes: %.4f m (%d pairs, scale %.4f)\nATE RMSE frames:    %.4f m (%d pairs)\n",
+                report["ate"]["keyframes"]["rmse_m"].get<double>(), report["ate"]["keyframes"]["pairs"].get<int>(),
+                report["ate"]["keyframes"]["scale"].get<double>(), report["ate"]["frames"]["rmse_m"].get<double>(),
+                report["ate"]["frames"]["pairs"].get<int>());
+  }
+  const auto summary = system.timer().summary();
+  if (summary.count("track"))
+    std::printf("tracking: median %.1f ms, p95 %.1f ms; wall %.1f s (%.1f fps), peak %.0f MB\n",
+                summary.at("track").median_ms + summary.at("extract").median_ms, summary.at("track").p95_ms, wall_s,
+                stats.frames / wall_s, peakRssMb());
+  std::cout << "output: " << out_dir << "\n";
+  std::fflush(stdout);
+  return 0;
+}
+
+}  // namespace vslam::app

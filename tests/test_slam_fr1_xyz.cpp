@@ -1,0 +1,66 @@
+// End-to-end monocular SLAM on the first 150 frames of TUM fr1_xyz (real data
+// from ../shared), deterministic mode so the result does not depend on timing.
+#include <gtest/gtest.h>
+
+#include "test_support.hpp"
+#include "vslam/eval/ate.hpp"
+#include "vslam/io/sequence.hpp"
+#include "vslam/slam/system.hpp"
+
+namespace vslam {
+namespace {
+
+struct RunResult {
+  std::vector<StampedPose> frames;
+  std::vector<StampedPose> keyframes;
+  SystemStats stats;
+};
+
+RunResult runFirstFrames(const Sequence& sequence, size_t count) {
+  SystemOptions options;
+  options.deterministic = true;
+  System system(sequence.config, options);
+  for (size_t i = 0; i < count && i < sequence.frames.size(); ++i)
+    system.processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, sequence.loadColor(i));
+  system.finish();
+  return {system.frameTrajectory(), system.keyframeTrajectory(), system.stats()};
+}
+
+TEST(SlamFr1Xyz, First150FramesTrackAccurately) {
+  SequenceOptions options;
+  options.data_root = test::sharedData().string();
+  const Sequence sequence = openSequence("tum/fr1_xyz", options);
+  const RunResult run = runFirstFrames(sequence, 150);
+
+  // Initialised within the first second (30 frames) and every later frame tracked.
+  ASSERT_GE(run.stats.initialised_at_index, 0);
+  EXPECT_LE(run.stats.initialised_at_index, 30);
+  EXPECT_GE(run.frames.size(), 140u);
+  EXPECT_GE(run.stats.keyframes, 5);
+
+  AteOptions ate_options;
+  ate_options.alignment = Alignment::Sim3;
+  const AteResult keyframe_ate = computeAte(run.keyframes, sequence.groundtruth, ate_options);
+  const AteResult frame_ate = computeAte(run.frames, sequence.groundtruth, ate_options);
+  EXPECT_LT(keyframe_ate.rmse_m, 0.02);  // the benchmark target is 1 cm over all 798 frames
+  EXPECT_LT(frame_ate.rmse_m, 0.03);
+  EXPECT_EQ(frame_ate.pairs, static_cast<int>(run.frames.size()));
+}
+
+TEST(SlamFr1Xyz, DeterministicModeRepeatsExactly) {
+  SequenceOptions options;
+  options.data_root = test::sharedData().string();
+  const Sequence sequence = openSequence("tum/fr1_xyz", options);
+  const RunResult first = runFirstFrames(sequence, 60);
+  const RunResult second = runFirstFrames(sequence, 60);
+  ASSERT_EQ(first.frames.size(), second.frames.size());
+  ASSERT_GT(first.frames.size(), 20u);
+  for (size_t i = 0; i < first.frames.size(); ++i) {
+    EXPECT_EQ(first.frames[i].timestamp, second.frames[i].timestamp);
+    EXPECT_EQ(first.frames[i].T_wc.t, second.frames[i].T_wc.t) << "frame " << i;
+    EXPECT_EQ(first.frames[i].T_wc.R, second.frames[i].T_wc.R) << "frame " << i;
+  }
+}
+
+}  // namespace
+}  // namespace vslam

@@ -1,0 +1,170 @@
+// The map database's bookkeeping on hand-built keyframes and points:
+// covisibility weights, spanning tree, culling, duplicate fusion, class votes.
+#include <gtest/gtest.h>
+
+#include "vslam/map/map.hpp"
+
+namespace vslam {
+namespace {
+
+class MapGraphTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    camera_.width = 640;
+    camera_.height = 480;
+    camera_.fx = camera_.fy = 500;
+    camera_.cx = 320;
+    camera_.cy = 240;
+    pyramid_.levels = 8;
+    pyramid_.scale_factor = 1.2;
+    double s = 1;
+    for (int l = 0; l < 8; ++l, s *= 1.2) {
+      pyramid_.scale.push_back(s);
+      pyramid_.sigma2.push_back(s * s);
+      pyramid_.inv_sigma2.push_back(1 / (s * s));
+    }
+  }
+
+  // A frame with `n` keypoints whose descriptors are all-zero except byte 0 = i.
+  Frame makeFrame(long id, int n, double x_offset = 0) {
+    Frame frame;
+    frame.id = id;
+    frame.index = static_cast<int>(id);
+    frame.timestamp = static_cast<double>(id);
+    frame.camera = &camera_;
+    frame.pyramid = &pyramid_;
+    frame.descriptors = cv::Mat::zeros(n, 32, CV_8U);
+    for (int i = 0; i < n; ++i) {
+      cv::KeyPoint kp(cv::Point2f(10.f + 5.f * (i % 100), 10.f + 5.f * (i / 100)), 31.f, 0.f, 1.f, 0);
+      frame.keypoints.push_back(kp);
+      frame.points.emplace_back(kp.pt.x, kp.pt.y);
+      frame.colours.emplace_back(static_cast<uchar>(i), 0, 0);
+      frame.descriptors.at<uint8_t>(i, 0) = static_cast<uint8_t>(i);
+    }
+    frame.T_cw.t = Vec3(x_offset, 0, 0);
+    frame.finalizeFeatures();
+    return frame;
+  }
+
+  // Point observed by keypoint `index` in each given keyframe.
+  MapPoint* observe(const std::vector<KeyFrame*>& keyframes, int index) {
+    MapPoint* point = map_.createMapPoint(Vec3(0, 0, 5), keyframes.front());
+    for (KeyFrame* kf : keyframes) {
+      point->addObservation(kf, index);
+      kf->setMapPoint(index, point);
+    }
+    return point;
+  }
+
+  PinholeCamera camera_;
+  ScalePyramid pyramid_;
+  Map map_;
+};
+
+TEST_F(MapGraphTest, CovisibilityWeightsAndParent) {
+  KeyFrame* a = map_.createKeyFrame(makeFrame(0, 100));
+  KeyFrame* b = map_.createKeyFrame(makeFrame(1, 100));
+  KeyFrame* c = map_.createKeyFrame(makeFrame(2, 100));
+  for (int i = 0; i < 40; ++i) observe({a, b, c}, i);   // 40 shared by all three
+  for (int i = 40; i < 60; ++i) observe({a, b}, i);     // 20 more shared by a and b
+  for (int i = 60; i < 70; ++i) observe({b, c}, i);     // 10 more by b and c
+  a->updateConnections();
+  b->updateConnections();
+  c->updateConnections();
+  EXPECT_EQ(a->weight(b), 60);
+  EXPECT_EQ(b->weight(a), 60);
+  EXPECT_EQ(a->weight(c), 40);
+  EXPECT_EQ(b->weight(c), 50);
+  ASSERT_EQ(b->orderedCovisibles().size(), 2u);
+  EXPECT_EQ(b->orderedCovisibles()[0], a);
+  EXPECT_EQ(b->parent(), a);   // strongest link at its first connection
+  EXPECT_EQ(c->parent(), b);
+  EXPECT_EQ(a->parent(), nullptr);
+  EXPECT_EQ(a->trackedMapPoints(3), 40);
+  EXPECT_EQ(b->trackedMapPoints(2), 70);
+}
+
+TEST_F(MapGraphTest, CullingAKeyFrameReparentsItsChildren) {
+  KeyFrame* a = map_.createKeyFrame(makeFrame(0, 100, 0.0));
+  KeyFrame* b = map_.createKeyFrame(makeFrame(1, 100, 0.1));
+  KeyFrame* c = map_.createKeyFrame(makeFrame(2, 100, 0.2));
+  for (int i = 0; i < 30; ++i) observe({a, b, c}, i);
+  for (int i = 30; i < 50; ++i) observe({b, c}, i);
+  a->updateConnections();
+  b->updateConnections();
+  c->updateConnections();
+  ASSERT_EQ(c->parent(), b);
+  b->setBad();
+  EXPECT_TRUE(b->isBad());
+  EXPECT_EQ(c->parent(), a);
+  EXPECT_EQ(a->children().count(c), 1u);
+  EXPECT_EQ(a->weight(b), 0);
+  // b's pose relative to its parent is kept for the trajectory: T_b_a = T_bw * T_aw^-1.
+  EXPECT_NEAR(b->poseRelativeToParent().t.x(), 0.1, 1e-12);
+  // Points seen by b and c only lost one observation and became single-view: bad.
+  EXPECT_EQ(map_.mapPointCount(), 30u);
+  EXPECT_EQ(map_.keyframeCount(), 2u);
+}
+
+TEST_F(MapGraphTest, ReplaceMovesObservationsAndKeepsOneSlot) {
+  KeyFrame* a = map_.createKeyFrame(makeFrame(0, 10));
+  KeyFrame* b = map_.createKeyFrame(makeFrame(1, 10));
+  KeyFrame* c = map_.createKeyFrame(makeFrame(2, 10));
+  MapPoint* kept = observe({a, b}, 3);
+  MapPoint* duplicate = map_.createMapPoint(Vec3(0, 0, 5), b);
+  duplicate->addObservation(b, 4);  // b sees both: that slot is dropped, not duplicated
+  b->setMapPoint(4, duplicate);
+  duplicate->addObservation(c, 5);
+  c->setMapPoint(5, duplicate);
+  duplicate->replaceWith(kept);
+  EXPECT_TRUE(duplicate->isBad());
+  EXPECT_EQ(duplicate->replacement(), kept);
+  EXPECT_EQ(kept->observationCount(), 3);
+  EXPECT_EQ(c->mapPoint(5), kept);
+  EXPECT_EQ(b->mapPoint(4), nullptr);
+  EXPECT_EQ(b->mapPoint(3), kept);
+}
+
+TEST_F(MapGraphTest, DescriptorIsTheMedoid) {
+  KeyFrame* a = map_.createKeyFrame(makeFrame(0, 10));
+  KeyFrame* b = map_.createKeyFrame(makeFrame(1, 10));
+  KeyFrame* c = map_.createKeyFrame(makeFrame(2, 10));
+  // Byte 0 values 0b0000, 0b0001, 0b0111 at keypoints 0, 1, 7: the middle one
+  // (index 1) has the smallest median distance to the others.
+  MapPoint* point = map_.createMapPoint(Vec3(0, 0, 5), a);
+  point->addObservation(a, 0);
+  point->addObservation(b, 1);
+  point->addObservation(c, 7);
+  point->updateDescriptor();
+  EXPECT_EQ(point->descriptor().at<uint8_t>(0, 0), 1);
+}
+
+TEST_F(MapGraphTest, ClassTakesTheMajorityOfObservations) {
+  std::vector<KeyFrame*> kfs;
+  for (int k = 0; k < 5; ++k) kfs.push_back(map_.createKeyFrame(makeFrame(k, 10)));
+  MapPoint* point = observe(kfs, 2);
+  kfs[0]->labels[2].class_id = 56;  // chair
+  kfs[1]->labels[2].class_id = 56;
+  kfs[2]->labels[2].class_id = 62;
+  point->updateClass();
+  EXPECT_EQ(point->classId(), -1);  // 2 of 5 is no majority
+  kfs[3]->labels[2].class_id = 56;
+  point->updateClass();
+  EXPECT_EQ(point->classId(), 56);
+  EXPECT_DOUBLE_EQ(point->classConfidence(), 0.6);
+}
+
+TEST_F(MapGraphTest, ScaleRangePredictsLevel) {
+  KeyFrame* a = map_.createKeyFrame(makeFrame(0, 10));
+  KeyFrame* b = map_.createKeyFrame(makeFrame(1, 10, 1.0));
+  MapPoint* point = observe({a, b}, 0);  // seen at level 0 from 5 m by a (reference)
+  point->updateNormalAndDepth(pyramid_);
+  EXPECT_NEAR(point->maxDistance(), 1.2 * 5.0, 1e-9);
+  EXPECT_NEAR(point->minDistance(), 0.8 * 5.0 / std::pow(1.2, 7), 1e-9);
+  EXPECT_EQ(point->predictLevel(5.0, pyramid_), 0);
+  EXPECT_EQ(point->predictLevel(5.0 / 1.2, pyramid_), 1);
+  EXPECT_EQ(point->predictLevel(5.0 / (1.2 * 1.2 * 1.01), pyramid_), 3);
+}
+
+}  // namespace
+}  // namespace vslam

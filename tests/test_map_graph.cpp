@@ -62,22 +62,29 @@ class MapGraphTest : public ::testing::Test {
 };
 
 TEST_F(MapGraphTest, CovisibilityWeightsAndParent) {
+  // Keyframes join one after the other, as in a run.
   KeyFrame* a = map_.createKeyFrame(makeFrame(0, 100));
   KeyFrame* b = map_.createKeyFrame(makeFrame(1, 100));
-  KeyFrame* c = map_.createKeyFrame(makeFrame(2, 100));
-  for (int i = 0; i < 40; ++i) observe({a, b, c}, i);   // 40 shared by all three
-  for (int i = 40; i < 60; ++i) observe({a, b}, i);     // 20 more shared by a and b
-  for (int i = 60; i < 70; ++i) observe({b, c}, i);     // 10 more by b and c
+  std::vector<MapPoint*> shared_by_all;
+  for (int i = 0; i < 40; ++i) shared_by_all.push_back(observe({a, b}, i));
+  for (int i = 40; i < 60; ++i) observe({a, b}, i);  // 20 more shared by a and b only
   a->updateConnections();
   b->updateConnections();
+  KeyFrame* c = map_.createKeyFrame(makeFrame(2, 100));
+  for (int i = 0; i < 40; ++i) {
+    shared_by_all[i]->addObservation(c, i);
+    c->setMapPoint(i, shared_by_all[i]);
+  }
+  for (int i = 60; i < 70; ++i) observe({b, c}, i);  // 10 more by b and c
   c->updateConnections();
   EXPECT_EQ(a->weight(b), 60);
   EXPECT_EQ(b->weight(a), 60);
   EXPECT_EQ(a->weight(c), 40);
+  EXPECT_EQ(c->weight(b), 50);
   EXPECT_EQ(b->weight(c), 50);
   ASSERT_EQ(b->orderedCovisibles().size(), 2u);
   EXPECT_EQ(b->orderedCovisibles()[0], a);
-  EXPECT_EQ(b->parent(), a);   // strongest link at its first connection
+  EXPECT_EQ(b->parent(), a);  // strongest link at its first connection
   EXPECT_EQ(c->parent(), b);
   EXPECT_EQ(a->parent(), nullptr);
   EXPECT_EQ(a->trackedMapPoints(3), 40);
@@ -87,11 +94,16 @@ TEST_F(MapGraphTest, CovisibilityWeightsAndParent) {
 TEST_F(MapGraphTest, CullingAKeyFrameReparentsItsChildren) {
   KeyFrame* a = map_.createKeyFrame(makeFrame(0, 100, 0.0));
   KeyFrame* b = map_.createKeyFrame(makeFrame(1, 100, 0.1));
-  KeyFrame* c = map_.createKeyFrame(makeFrame(2, 100, 0.2));
-  for (int i = 0; i < 30; ++i) observe({a, b, c}, i);
-  for (int i = 30; i < 50; ++i) observe({b, c}, i);
+  std::vector<MapPoint*> shared_by_all;
+  for (int i = 0; i < 30; ++i) shared_by_all.push_back(observe({a, b}, i));
   a->updateConnections();
   b->updateConnections();
+  KeyFrame* c = map_.createKeyFrame(makeFrame(2, 100, 0.2));
+  for (int i = 0; i < 30; ++i) {
+    shared_by_all[i]->addObservation(c, i);
+    c->setMapPoint(i, shared_by_all[i]);
+  }
+  for (int i = 30; i < 50; ++i) observe({b, c}, i);
   c->updateConnections();
   ASSERT_EQ(c->parent(), b);
   b->setBad();
@@ -162,7 +174,7 @@ TEST_F(MapGraphTest, ScaleRangePredictsLevel) {
   EXPECT_NEAR(point->maxDistance(), 1.2 * 5.0, 1e-9);
   EXPECT_NEAR(point->minDistance(), 0.8 * 5.0 / std::pow(1.2, 7), 1e-9);
   EXPECT_EQ(point->predictLevel(5.0, pyramid_), 0);
-  EXPECT_EQ(point->predictLevel(5.0 / 1.2, pyramid_), 1);
+  EXPECT_EQ(point->predictLevel(5.0 / 1.1, pyramid_), 1);
   EXPECT_EQ(point->predictLevel(5.0 / (1.2 * 1.2 * 1.01), pyramid_), 3);
 }
 

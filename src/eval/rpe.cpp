@@ -3,15 +3,17 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Geometry>
+
 #include "vslam/core/error.hpp"
 
 namespace vslam {
 namespace {
 
 double rotationAngleDeg(const Mat3& R) {
-  // acos of (trace - 1) / 2, clamped against rounding just outside [-1, 1].
-  const double c = std::clamp((R.trace() - 1.0) / 2.0, -1.0, 1.0);
-  return std::acos(c) * 180.0 / M_PI;
+  // Through the quaternion: acos((trace - 1) / 2) loses all precision for the
+  // tiny angles that good estimates have.
+  return Eigen::AngleAxisd(Quat(R).normalized()).angle() * 180.0 / M_PI;
 }
 
 }  // namespace

@@ -1,12 +1,162 @@
-// `vslam run`: placeholder until the sequence readers land.
+// `vslam run`: runs SLAM on a sequence. Stage 1 (this file for now): load the
+// sequence, fetch a missing TUM sequence, and report what was found; the SLAM
+// pipeline fills in the rest.
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
 #include "commands.hpp"
+#include "vslam/core/error.hpp"
+#include "vslam/io/sequence.hpp"
 
 namespace vslam::app {
+namespace {
+
+struct RunOptions {
+  std::string seq;
+  SequenceOptions sequence;
+  std::string mode = "mono";
+  std::string out_dir;
+  std::string detector;  // "" = the config's detector.model
+  bool deterministic = false;
+  bool no_fetch = false;
+  int max_frames = 0;
+};
+
+std::string shellQuoted(const std::string& text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
+// A TUM sequence that is nowhere on disk is fetched from the benchmark's
+// archive by tools/fetch_dataset.sh, then looked up again.
+Sequence openOrFetch(const RunOptions& options) {
+  try {
+    return openSequence(options.seq, options.sequence);
+  } catch (const SequenceNotFound& not_found) {
+    if (options.no_fetch || options.seq.rfind("tum/", 0) != 0) throw;
+    spdlog::warn("{}", not_found.what());
+    const std::string script = std::string(VSLAM_SOURCE_DIR) + "/tools/fetch_dataset.sh";
+    const std::string command = "bash " + shellQuoted(script) + " --data-root " +
+                                shellQuoted(fetchDataRoot(options.sequence)) + " " + shellQuoted(options.seq) +
+                                " 1>&2";  // stdout is for results only
+    spdlog::info("fetching {}: {}", options.seq, command);
+    if (std::system(command.c_str()) != 0)
+      throw InputError(std::string(not_found.what()) + " (fetching it failed; see the messages above)");
+    return openSequence(options.seq, options.sequence);
+  }
+}
+
+std::string fixed(double value, int decimals) {
+  char text[64];
+  std::snprintf(text, sizeof(text), "%.*f", decimals, value);
+  return text;
+}
+
+int run(RunOptions options) {
+  Sequence sequence = openOrFetch(options);
+  const size_t total_frames = sequence.frames.size();
+  if (options.max_frames > 0 && static_cast<size_t>(options.max_frames) < total_frames)
+    sequence.frames.resize(options.max_frames);
+  if (!options.detector.empty()) sequence.config.detector.model = options.detector;
+
+  if (options.mode == "rgbd") {
+    if (sequence.kind == SequenceKind::Kitti)
+      throw InputError(sequence.root, 0, "--mode rgbd needs depth images, and KITTI sequences have none");
+    if (sequence.framesWithDepth() == 0)
+      throw InputError(sequence.root + "/depth.txt", 0, "no depth images paired (--mode rgbd needs depth.txt)");
+    if (!sequence.hasDepth())
+      spdlog::warn("--mode rgbd: {} of {} frames have no depth image", sequence.frames.size() - sequence.framesWithDepth(),
+                   sequence.frames.size());
+  }
+
+  const PinholeCamera& c = sequence.config.camera;
+  std::cout << "sequence: " << sequence.name << "\n";
+  std::cout << "root: " << sequence.root << "\n";
+  std::cout << "kind: " << (sequence.kind == SequenceKind::Tum ? "tum" : "kitti") << "\n";
+  std::cout << "frames: " << sequence.frames.size();
+  if (sequence.frames.size() != total_frames) std::cout << " (first " << sequence.frames.size() << " of " << total_frames << ")";
+  std::cout << "\n";
+  const double first_t = sequence.frames.front().timestamp, last_t = sequence.frames.back().timestamp;
+  std::cout << "time span: " << fixed(first_t, 6) << " .. " << fixed(last_t, 6) << " s (" << fixed(last_t - first_t, 3)
+            << " s)\n";
+  std::cout << std::setprecision(10) << "camera: " << c.name << " " << c.width << "x" << c.height << " fx " << c.fx << " fy " << c.fy << " cx "
+            << c.cx << " cy " << c.cy << " k1 " << c.k1 << " k2 " << c.k2 << " p1 " << c.p1 << " p2 " << c.p2 << " k3 "
+            << c.k3 << " fps " << c.fps;
+  if (c.baseline_m > 0) std::cout << " baseline " << c.baseline_m << " m";
+  std::cout << " (" << sequence.config.source << ")\n";
+  std::cout << "depth: " << sequence.framesWithDepth() << " of " << sequence.frames.size() << " frames paired\n";
+  if (sequence.hasGroundTruth()) {
+    const auto& gt = sequence.groundtruth;
+    std::cout << "groundtruth: " << gt.size() << " poses, " << fixed(gt.front().timestamp, 6) << " .. "
+              << fixed(gt.back().timestamp, 6) << " s (" << fixed(gt.back().timestamp - gt.front().timestamp, 3)
+              << " s), path length " << fixed(pathLength(gt), 3) << " m (" << sequence.groundtruth_path << ")\n";
+  } else {
+    std::cout << "groundtruth: none\n";
+  }
+  std::cout << "mode: " << options.mode << "\n";
+  std::cout << "detector: " << sequence.config.detector.model << "\n";
+  std::cout << "deterministic: " << (options.deterministic ? "yes" : "no") << "\n";
+
+  if (!options.out_dir.empty()) {
+    std::filesystem::create_directories(options.out_dir);
+    const std::string path = options.out_dir + "/sequence.json";
+    nlohmann::json info = {{"sequence", sequence.name},
+                           {"root", sequence.root},
+                           {"frames", sequence.frames.size()},
+                           {"camera", c.name},
+                           {"config", sequence.config.source},
+                           {"frames_with_depth", sequence.framesWithDepth()},
+                           {"groundtruth_poses", sequence.groundtruth.size()},
+                           {"groundtruth_path", sequence.groundtruth_path},
+                           {"mode", options.mode}};
+    std::ofstream out(path);
+    if (!(out << info.dump(2) << "\n")) throw InputError(path, 0, "cannot write file");
+    std::cout << "output: " << path << "\n";
+  }
+  spdlog::info("stage 1: sequence loaded; tracking, mapping and loop closing are not wired in yet");
+  return 0;
+}
+
+}  // namespace
 
 Command addRunCommand(CLI::App& app) {
+  auto options = std::make_shared<RunOptions>();
   Command command;
-  command.cli = app.add_subcommand("run", "Run SLAM on a sequence");
-  command.run = [] { return 0; };
+  CLI::App* cli = app.add_subcommand("run", "Run SLAM on a sequence");
+  cli->add_option("--seq", options->seq,
+                  "Sequence: tum/<name> (e.g. tum/fr1_xyz), kitti/<NN> (e.g. kitti/00), or a folder in TUM or "
+                  "KITTI layout")
+      ->required();
+  cli->add_option("--config", options->sequence.config_path,
+                  "Camera and pipeline YAML (ours or an ORB-SLAM2 settings file) (default: config/<camera>.yaml "
+                  "chosen from the sequence name)");
+  cli->add_option("--data-root", options->sequence.data_root,
+                  "Folder searched first for named sequences (then $VSLAM_DATA, ./data, ../shared/data) (default: "
+                  "none)");
+  cli->add_option("--mode", options->mode, "Sensor mode")
+      ->check(CLI::IsMember({"mono", "rgbd"}))
+      ->capture_default_str();
+  cli->add_option("--out", options->out_dir, "Output folder (default: none)");
+  cli->add_option("--detector", options->detector,
+                  "Object detector model, or 'none' (default: the config's detector.model)");
+  cli->add_flag("--deterministic", options->deterministic,
+                "Run the threads in lock-step so that repeated runs give identical results (default: off)");
+  cli->add_flag("--no-fetch", options->no_fetch,
+                "Do not download a TUM sequence that is not found (default: fetch with tools/fetch_dataset.sh)");
+  cli->add_option("--max-frames", options->max_frames, "Process only the first N frames; 0 = all")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command.cli = cli;
+  command.run = [options] { return run(*options); };
   return command;
 }
 

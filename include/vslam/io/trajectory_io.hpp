@@ -1,0 +1,28 @@
+#pragma once
+// Trajectory files (camera-to-world poses T_wc):
+//  - TUM:   one pose a line, "timestamp tx ty tz qx qy qz qw", '#' comments.
+//  - KITTI: one pose a line, the 12 numbers of the 3x4 matrix [R|t], row-major;
+//           line i belongs to frame i.
+// Readers throw InputError "FILE:LINE: what is wrong" on a malformed line,
+// a timestamp that does not increase, or a rotation that is not one.
+#include <string>
+#include <vector>
+
+#include "vslam/core/types.hpp"
+
+namespace vslam {
+
+std::vector<StampedPose> readTumTrajectory(const std::string& path);
+
+// Timestamps with 6 decimals ("%.6f", microseconds as the benchmark writes them),
+// every other number with 9 significant digits.
+void writeTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses);
+
+// `timestamps`: one per line (e.g. times.txt); empty means timestamp = line index.
+// A count that differs from the number of poses is an error.
+std::vector<StampedPose> readKittiTrajectory(const std::string& path, const std::vector<double>& timestamps = {});
+
+// 12 numbers a line with 9 significant digits; timestamps are not written.
+void writeKittiTrajectory(const std::string& path, const std::vector<StampedPose>& poses);
+
+}  // namespace vslam

@@ -1,0 +1,401 @@
+#include "vslam/io/sequence.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <optional>
+#include <regex>
+#include <stdexcept>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <spdlog/spdlog.h>
+
+#include "vslam/io/sequence_catalog.hpp"
+#include "vslam/io/text_table.hpp"
+#include "vslam/io/timestamp_association.hpp"
+#include "vslam/io/trajectory_io.hpp"
+
+namespace vslam {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The benchmark's associate.py default: colour and depth closer than this pair up.
+constexpr double kDepthPairingMaxDifference = 0.02;
+
+bool startsWith(const std::string& text, const std::string& prefix) { return text.rfind(prefix, 0) == 0; }
+
+std::string absoluteFolder(const fs::path& path) { return fs::weakly_canonical(fs::absolute(path)).string(); }
+
+std::string timestampText(double t) {
+  char text[64];
+  std::snprintf(text, sizeof(text), "%.6f", t);
+  return text;
+}
+
+// One line of rgb.txt / depth.txt: "timestamp relative/path".
+struct ListedImage {
+  double timestamp = 0.0;
+  std::string path;
+  int line = 0;
+};
+
+std::vector<ListedImage> readImageList(const fs::path& list_path, const fs::path& root) {
+  const std::string file = list_path.string();
+  std::vector<ListedImage> images;
+  for (const TextRow& row : readTextRows(file)) {
+    if (row.fields.size() != 2)
+      throw InputError(file, row.line,
+                       "expected 'timestamp path', found " + std::to_string(row.fields.size()) + " fields");
+    ListedImage image;
+    image.timestamp = parseNumber(row.fields[0], file, row.line, "timestamp");
+    image.path = (root / row.fields[1]).lexically_normal().string();
+    image.line = row.line;
+    if (!images.empty() && image.timestamp <= images.back().timestamp)
+      throw InputError(file, row.line,
+                       "timestamp " + timestampText(image.timestamp) + " goes backwards (previous line has " +
+                           timestampText(images.back().timestamp) + ")");
+    images.push_back(image);
+  }
+  if (images.empty()) throw InputError(file, 0, "lists no images");
+  return images;
+}
+
+void readTumFolder(Sequence& sequence) {
+  const fs::path root = sequence.root;
+  const fs::path rgb_list = root / "rgb.txt";
+  if (!fs::exists(rgb_list)) throw InputError(rgb_list.string(), 0, "missing (a TUM sequence folder needs rgb.txt)");
+  const std::vector<ListedImage> colour = readImageList(rgb_list, root);
+  for (size_t i = 0; i < colour.size(); ++i) {
+    FrameEntry frame;
+    frame.index = static_cast<int>(i);
+    frame.timestamp = colour[i].timestamp;
+    frame.image_path = colour[i].path;
+    frame.list_line = colour[i].line;
+    sequence.frames.push_back(frame);
+  }
+
+  // Depth is optional: a monocular run needs none.
+  const fs::path depth_list = root / "depth.txt";
+  if (fs::exists(depth_list)) {
+    const std::vector<ListedImage> depth = readImageList(depth_list, root);
+    std::vector<double> colour_times, depth_times;
+    for (const ListedImage& image : colour) colour_times.push_back(image.timestamp);
+    for (const ListedImage& image : depth) depth_times.push_back(image.timestamp);
+    for (const auto& [c, d] : associateTimestamps(colour_times, depth_times, kDepthPairingMaxDifference))
+      sequence.frames[c].depth_path = depth[d].path;
+    const int unpaired = static_cast<int>(sequence.frames.size()) - sequence.framesWithDepth();
+    if (unpaired > 0)
+      spdlog::warn("{}: {} of {} colour frames have no depth image within {} s", depth_list.string(), unpaired,
+                   sequence.frames.size(), kDepthPairingMaxDifference);
+  }
+
+  const fs::path groundtruth = root / "groundtruth.txt";
+  if (fs::exists(groundtruth)) {
+    sequence.groundtruth_path = groundtruth.string();
+    sequence.groundtruth = readTumTrajectory(sequence.groundtruth_path);
+  }
+}
+
+// The intrinsics of calib.txt (P0 = left grey camera) override the config's.
+void readKittiCalibration(const fs::path& calib_path, PinholeCamera& camera) {
+  const std::string file = calib_path.string();
+  if (!fs::exists(calib_path)) throw InputError(file, 0, "missing (a KITTI sequence folder needs calib.txt with P0)");
+  auto projection = [&](const TextRow& row) {
+    if (row.fields.size() != 13)
+      throw InputError(file, row.line,
+                       "expected '" + row.fields[0] + "' and 12 numbers, found " +
+                           std::to_string(row.fields.size() - 1) + " numbers");
+    std::vector<double> p;
+    for (int k = 1; k < 13; ++k) p.push_back(parseNumber(row.fields[k], file, row.line, row.fields[0] + " entry"));
+    return p;
+  };
+  bool found_p0 = false;
+  for (const TextRow& row : readTextRows(file)) {
+    if (row.fields[0] == "P0:") {
+      const std::vector<double> p = projection(row);
+      if (p[0] <= 0 || p[5] <= 0) throw InputError(file, row.line, "P0 has a non-positive focal length");
+      camera.fx = p[0];
+      camera.cx = p[2];
+      camera.fy = p[5];
+      camera.cy = p[6];
+      found_p0 = true;
+    } else if (row.fields[0] == "P1:") {
+      // P1 = K [I | -b e_x]: its fourth entry is -fx * baseline.
+      const std::vector<double> p = projection(row);
+      if (p[0] > 0) camera.baseline_m = -p[3] / p[0];
+    }
+  }
+  if (!found_p0) throw InputError(file, 0, "no 'P0:' line (the left camera's 3x4 projection matrix)");
+}
+
+void readKittiFolder(Sequence& sequence, const fs::path& poses_path) {
+  const fs::path root = sequence.root;
+  const fs::path times_path = root / "times.txt";
+  const std::string times_file = times_path.string();
+  if (!fs::exists(times_path)) throw InputError(times_file, 0, "missing (a KITTI sequence folder needs times.txt)");
+  std::vector<double> times;
+  for (const TextRow& row : readTextRows(times_file)) {
+    if (row.fields.size() != 1)
+      throw InputError(times_file, row.line,
+                       "expected one timestamp, found " + std::to_string(row.fields.size()) + " fields");
+    const double t = parseNumber(row.fields[0], times_file, row.line, "timestamp");
+    if (!times.empty() && t <= times.back())
+      throw InputError(times_file, row.line,
+                       "timestamp " + timestampText(t) + " goes backwards (previous line has " +
+                           timestampText(times.back()) + ")");
+    times.push_back(t);
+  }
+  if (times.empty()) throw InputError(times_file, 0, "lists no timestamps");
+
+  const fs::path image_dir = root / "image_0";
+  if (!fs::is_directory(image_dir))
+    throw InputError(image_dir.string(), 0, "missing (a KITTI sequence folder needs the left grey images in image_0/)");
+  // Images are NNNNNN.png (official) or .jpg (re-encoded copies); one extension per sequence.
+  static const std::regex kImageName(R"(\d{6}\.(png|jpg|jpeg))");
+  std::string extension;
+  size_t image_count = 0;
+  for (const auto& entry : fs::directory_iterator(image_dir)) {
+    const std::string file_name = entry.path().filename().string();
+    if (!std::regex_match(file_name, kImageName)) continue;
+    ++image_count;
+    if (file_name.rfind("000000.", 0) == 0) extension = entry.path().extension().string();
+  }
+  if (extension.empty()) throw InputError(image_dir.string(), 0, "has no first image 000000.png or 000000.jpg");
+  if (image_count != times.size())
+    throw InputError(times_file, 0,
+                     "lists " + std::to_string(times.size()) + " timestamps but " + image_dir.string() + " holds " +
+                         std::to_string(image_count) + " images");
+  for (size_t i = 0; i < times.size(); ++i) {
+    char file_name[32];
+    std::snprintf(file_name, sizeof(file_name), "%06zu", i);
+    FrameEntry frame;
+    frame.index = static_cast<int>(i);
+    frame.timestamp = times[i];
+    frame.image_path = (image_dir / (file_name + extension)).string();
+    sequence.frames.push_back(frame);
+  }
+
+  readKittiCalibration(root / "calib.txt", sequence.config.camera);
+
+  if (!poses_path.empty() && fs::exists(poses_path)) {
+    sequence.groundtruth_path = absoluteFolder(poses_path);
+    sequence.groundtruth = readKittiTrajectory(sequence.groundtruth_path, times);
+  }
+}
+
+Config loadCameraConfig(const SequenceOptions& options, const std::string& camera, const std::string& folder) {
+  if (!options.config_path.empty()) return loadConfig(options.config_path);
+  if (camera.empty())
+    throw InputError(folder, 0,
+                     "cannot tell the camera from the folder name; pass --config FILE (e.g. config/tum_fr1.yaml "
+                     "or an ORB-SLAM2 settings file)");
+  return loadConfig(projectConfigDir() + "/" + camera + ".yaml");
+}
+
+std::string joined(const std::vector<std::string>& items, const std::string& separator) {
+  std::string text;
+  for (size_t i = 0; i < items.size(); ++i) text += (i ? separator : "") + items[i];
+  return text;
+}
+
+std::string listOfTumNames() {
+  std::vector<std::string> names;
+  for (const char* n : {"fr1_xyz", "fr1_desk", "fr2_xyz", "fr3_long_office_household", "fr3_teddy"})
+    names.push_back(std::string("tum/") + n);
+  return joined(names, ", ");
+}
+
+struct Located {
+  fs::path folder;
+  SequenceKind kind = SequenceKind::Tum;
+  std::string camera;  // config/<camera>.yaml, "" if unknown
+  fs::path kitti_poses;
+};
+
+Located locateTum(const std::string& spec, const SequenceOptions& options) {
+  const std::string short_name = spec.substr(4);
+  const std::optional<TumSequenceInfo> info = findTumSequence(short_name);
+  if (!info)
+    throw InputError(spec, 0,
+                     "unknown TUM RGB-D sequence; valid names are tum/fr1_..., tum/fr2_..., tum/fr3_... as on the "
+                     "benchmark's page, e.g. " +
+                         listOfTumNames() + " (tools/fetch_dataset.sh --list prints all)");
+  std::vector<std::string> looked;
+  for (const std::string& root : dataSearchRoots(options)) {
+    for (const fs::path& candidate : {fs::path(root) / "tum" / info->archive_name, fs::path(root) / info->archive_name}) {
+      looked.push_back(candidate.string());
+      if (fs::is_directory(candidate)) return {candidate, SequenceKind::Tum, info->camera, {}};
+    }
+  }
+  throw SequenceNotFound(spec, 0,
+                         "sequence not found; looked in " + joined(looked, ", ") + ". Fetch it with "
+                         "'tools/fetch_dataset.sh tum/" + info->short_name + "' (needs internet), or download " +
+                             tumArchiveUrl(*info) + " by hand and unpack it into " + fetchDataRoot(options) + "/tum/");
+}
+
+Located locateKitti(const std::string& spec, const SequenceOptions& options) {
+  const std::string number_text = spec.substr(6);
+  static const std::regex kNumber(R"(\d{1,2})");
+  if (!std::regex_match(number_text, kNumber) || std::stoi(number_text) >= kKittiSequenceCount)
+    throw InputError(spec, 0, "unknown KITTI odometry sequence; valid names are kitti/00 ... kitti/21");
+  const int number = std::stoi(number_text);
+  char nn[8];
+  std::snprintf(nn, sizeof(nn), "%02d", number);
+  std::vector<std::string> looked;
+  for (const std::string& root : dataSearchRoots(options)) {
+    const fs::path candidate = fs::path(root) / "kitti" / "sequences" / nn;
+    looked.push_back(candidate.string());
+    if (fs::is_directory(candidate))
+      return {candidate, SequenceKind::Kitti, kittiCameraFor(number),
+              fs::path(root) / "kitti" / "poses" / (std::string(nn) + ".txt")};
+  }
+  throw SequenceNotFound(spec, 0,
+                         "sequence not found; looked in " + joined(looked, ", ") +
+                             ". KITTI odometry needs registration at cvlibs.net: download the grey images and "
+                             "poses and unpack them so that " + fetchDataRoot(options) + "/kitti/sequences/" + nn +
+                             "/image_0/ and " + fetchDataRoot(options) + "/kitti/poses/" + nn + ".txt exist");
+}
+
+Located locateFolder(const std::string& spec) {
+  const fs::path folder = spec;
+  const std::string folder_name = fs::absolute(folder).lexically_normal().filename().string().empty()
+                                      ? fs::absolute(folder).lexically_normal().parent_path().filename().string()
+                                      : fs::absolute(folder).lexically_normal().filename().string();
+  static const std::regex kTumName(R"(rgbd_dataset_freiburg([123])_.+)");
+  static const std::regex kKittiName(R"(\d{2})");
+  std::smatch match;
+  const bool tum_named = std::regex_match(folder_name, match, kTumName);
+  const std::string tum_camera = tum_named ? "tum_fr" + match[1].str() : "";
+
+  if (tum_named || fs::exists(folder / "rgb.txt")) return {folder, SequenceKind::Tum, tum_camera, {}};
+  if (fs::is_directory(folder / "image_0") && fs::exists(folder / "times.txt")) {
+    Located located{folder, SequenceKind::Kitti, "", {}};
+    // Standard odometry layout: <root>/sequences/NN beside <root>/poses/NN.txt.
+    if (std::regex_match(folder_name, kKittiName)) {
+      located.camera = kittiCameraFor(std::stoi(folder_name));
+      located.kitti_poses = fs::absolute(folder).lexically_normal().parent_path().parent_path() / "poses" /
+                            (folder_name + ".txt");
+    }
+    return located;
+  }
+  throw InputError((folder / "rgb.txt").string(), 0,
+                   "missing: the folder is neither in TUM layout (rgb.txt) nor in KITTI layout (image_0/ and "
+                   "times.txt)");
+}
+
+}  // namespace
+
+std::vector<std::string> dataSearchRoots(const SequenceOptions& options) {
+  std::vector<std::string> roots;
+  if (!options.data_root.empty()) roots.push_back(options.data_root);
+  if (const char* env = std::getenv("VSLAM_DATA"); env && *env) roots.push_back(env);
+  roots.push_back("./data");
+  roots.push_back("../shared/data");
+  return roots;
+}
+
+std::string fetchDataRoot(const SequenceOptions& options) {
+  if (!options.data_root.empty()) return options.data_root;
+  if (const char* env = std::getenv("VSLAM_DATA"); env && *env) return env;
+  return "./data";
+}
+
+double pathLength(const std::vector<StampedPose>& poses) {
+  double length = 0.0;
+  for (size_t i = 1; i < poses.size(); ++i) length += (poses[i].T_wc.t - poses[i - 1].T_wc.t).norm();
+  return length;
+}
+
+Sequence openSequence(const std::string& spec, const SequenceOptions& options) {
+  if (spec.empty()) throw InputError("--seq: empty sequence name (tum/<name>, kitti/<NN> or a folder)");
+  Located located;
+  if (fs::is_directory(spec)) {
+    located = locateFolder(spec);
+  } else if (startsWith(spec, "tum/")) {
+    located = locateTum(spec, options);
+  } else if (startsWith(spec, "kitti/")) {
+    located = locateKitti(spec, options);
+  } else if (fs::exists(spec)) {
+    throw InputError(spec, 0, "is a file, not a sequence folder");
+  } else {
+    throw InputError(spec, 0, "no such folder, and not a sequence name (tum/<name> such as tum/fr1_xyz, or kitti/<NN>)");
+  }
+
+  Sequence sequence;
+  sequence.name = spec;
+  sequence.root = absoluteFolder(located.folder);
+  sequence.kind = located.kind;
+  sequence.config = loadCameraConfig(options, located.camera, sequence.root);
+  if (located.kind == SequenceKind::Tum)
+    readTumFolder(sequence);
+  else
+    readKittiFolder(sequence, located.kitti_poses);
+
+  // ORB-SLAM2 settings files carry no image size: take it from the first image.
+  PinholeCamera& camera = sequence.config.camera;
+  if (camera.width <= 0 || camera.height <= 0) {
+    camera.width = camera.height = 0;  // so the size check in loadColor stays quiet
+    const cv::Mat first = sequence.loadGray(0);
+    camera.width = first.cols;
+    camera.height = first.rows;
+  }
+  return sequence;
+}
+
+bool Sequence::hasDepth() const { return !frames.empty() && framesWithDepth() == static_cast<int>(frames.size()); }
+
+int Sequence::framesWithDepth() const {
+  return static_cast<int>(
+      std::count_if(frames.begin(), frames.end(), [](const FrameEntry& f) { return !f.depth_path.empty(); }));
+}
+
+cv::Mat Sequence::readImage(const std::string& path, int imread_flags, int list_line, const char* what) const {
+  const std::string listed_at =
+      list_line > 0 ? " (listed at " + (fs::path(root) / what).string() + ":" + std::to_string(list_line) + ")" : "";
+  if (!fs::exists(path)) throw InputError(path, 0, "image file does not exist" + listed_at);
+  cv::Mat image;
+  try {
+    image = cv::imread(path, imread_flags);
+  } catch (const cv::Exception& e) {
+    throw InputError(path, 0, "cannot decode image: " + e.msg + listed_at);
+  }
+  if (image.empty()) throw InputError(path, 0, "cannot decode image (not a readable PNG or JPEG)" + listed_at);
+  const PinholeCamera& camera = config.camera;
+  if (camera.width > 0 && camera.height > 0 && (image.cols != camera.width || image.rows != camera.height))
+    throw InputError(path, 0,
+                     "image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) + " but camera '" +
+                         camera.name + "' of " + (config.source.empty() ? "the config" : config.source) + " is " +
+                         std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  return image;
+}
+
+cv::Mat Sequence::loadColor(size_t i) const {
+  const FrameEntry& frame = frames.at(i);
+  cv::Mat image = readImage(frame.image_path, cv::IMREAD_COLOR, frame.list_line, "rgb.txt");
+  return image;  // IMREAD_COLOR already expands grey images to 3 channels
+}
+
+cv::Mat Sequence::loadGray(size_t i) const {
+  const FrameEntry& frame = frames.at(i);
+  return readImage(frame.image_path, cv::IMREAD_GRAYSCALE, frame.list_line, "rgb.txt");
+}
+
+cv::Mat Sequence::loadDepthMeters(size_t i) const {
+  const FrameEntry& frame = frames.at(i);
+  if (frame.depth_path.empty())
+    throw InputError((fs::path(root) / "depth.txt").string(), 0,
+                     "no depth image within 0.02 s of colour frame " + std::to_string(i) + " (" + frame.image_path +
+                         ")");
+  const cv::Mat raw = readImage(frame.depth_path, cv::IMREAD_UNCHANGED, 0, "depth.txt");
+  if (raw.type() != CV_16UC1) throw InputError(frame.depth_path, 0, "depth image is not a single-channel 16-bit PNG");
+  if (config.camera.depth_factor <= 0)
+    throw InputError(config.source, 0, "camera.depth_factor must be positive to read depth images");
+  cv::Mat metres;
+  raw.convertTo(metres, CV_32F, 1.0 / config.camera.depth_factor);
+  return metres;
+}
+
+}  // namespace vslam

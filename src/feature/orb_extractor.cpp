@@ -70,12 +70,20 @@ void detectCorners(const cv::Mat& image, const cv::Rect& region, int threshold, 
   for (const cv::KeyPoint& kp : corners)
     ++count[row_of[static_cast<int>(kp.pt.y) - region.y] * n_cols + col_of[static_cast<int>(kp.pt.x) - region.x]];
   if (min_threshold >= threshold) return;
+  // Re-run in horizontal runs of empty cells: one FAST call per run gives the
+  // same corners as one per cell and saves the per-call overhead.
   for (int r = 0; r < n_rows; ++r) {
-    for (int c = 0; c < n_cols; ++c) {
-      if (count[r * n_cols + c] > 0) continue;
-      const int x0 = cellStart(region.x, region.width, n_cols, c), x1 = cellStart(region.x, region.width, n_cols, c + 1);
-      const int y0 = cellStart(region.y, region.height, n_rows, r), y1 = cellStart(region.y, region.height, n_rows, r + 1);
+    const int y0 = cellStart(region.y, region.height, n_rows, r), y1 = cellStart(region.y, region.height, n_rows, r + 1);
+    for (int c = 0; c < n_cols;) {
+      if (count[r * n_cols + c] > 0) {
+        ++c;
+        continue;
+      }
+      int end = c;
+      while (end < n_cols && count[r * n_cols + end] == 0) ++end;
+      const int x0 = cellStart(region.x, region.width, n_cols, c), x1 = cellStart(region.x, region.width, n_cols, end);
       runFast(cv::Rect(x0, y0, x1 - x0, y1 - y0), min_threshold, corners);
+      c = end;
     }
   }
 }
@@ -184,23 +192,28 @@ float centroidAngle(const cv::Mat& image, const cv::Point& p, const std::vector<
   return static_cast<float>(angle);
 }
 
-void computeDescriptor(const cv::Mat& blurred, const cv::Point& p, float angle_deg, const std::vector<BriefPair>& pattern,
-                       uchar* out) {
+// Rounds to nearest (halves up) for |v| < 64; unlike cvRound it vectorises.
+inline int roundSmall(float v) { return static_cast<int>(v + 64.5f) - 64; }
+
+// 256-bit rotated BRIEF. `points_x/y` hold the 512 test points (pair i =
+// points 2i, 2i+1), rotated here by the keypoint angle.
+void computeDescriptor(const cv::Mat& blurred, const cv::Point& p, float angle_deg, const float* points_x,
+                       const float* points_y, uchar* out) {
   const uchar* centre = blurred.ptr<uchar>(p.y) + p.x;
   const int step = static_cast<int>(blurred.step1());
-  const double angle = angle_deg * (CV_PI / 180.0);
-  const double c = std::cos(angle), s = std::sin(angle);
-  const auto sample = [&](int x, int y) {
-    const int rx = cvRound(x * c - y * s), ry = cvRound(x * s + y * c);
-    return centre[ry * step + rx];
-  };
+  const float angle = angle_deg * static_cast<float>(CV_PI / 180.0);
+  const float c = std::cos(angle), s = std::sin(angle);
+  int offsets[2 * 256];
+  for (int i = 0; i < 2 * 256; ++i) {
+    const float x = points_x[i] * c - points_y[i] * s;
+    const float y = points_x[i] * s + points_y[i] * c;
+    offsets[i] = roundSmall(y) * step + roundSmall(x);
+  }
   for (int byte = 0; byte < kOrbDescriptorBytes; ++byte) {
-    uchar value = 0;
-    for (int bit = 0; bit < 8; ++bit) {
-      const BriefPair& t = pattern[byte * 8 + bit];
-      if (sample(t.x1, t.y1) < sample(t.x2, t.y2)) value |= static_cast<uchar>(1u << bit);
-    }
-    out[byte] = value;
+    const int* o = offsets + 16 * byte;
+    unsigned value = 0;
+    for (int bit = 0; bit < 8; ++bit) value |= static_cast<unsigned>(centre[o[2 * bit]] < centre[o[2 * bit + 1]]) << bit;
+    out[byte] = static_cast<uchar>(value);
   }
 }
 
@@ -248,6 +261,10 @@ OrbExtractor::OrbExtractor(const OrbParams& params) : params_(params), pattern_(
     level_sigma2_.push_back(scale * scale);
     inv_level_sigma2_.push_back(1.0 / (scale * scale));
     scale *= params_.scale_factor;
+  }
+  for (const BriefPair& t : pattern_) {
+    pattern_x_.push_back(t.x1), pattern_y_.push_back(t.y1);
+    pattern_x_.push_back(t.x2), pattern_y_.push_back(t.y2);
   }
   // Integer disc u^2 + v^2 <= r^2: symmetric under 90-degree rotations and
   // transposition, so orientation is exactly rotation-covariant on the grid.
@@ -362,8 +379,8 @@ void OrbExtractor::extract(const ImagePyramid& pyramid, std::vector<cv::KeyPoint
   keypoints.reserve(kept.size());
   for (std::size_t i = 0; i < kept.size(); ++i) {
     const cv::KeyPoint& kp = kept[i].keypoint;
-    computeDescriptor(pyramid.blurred[kp.octave], cv::Point(cvRound(kp.pt.x), cvRound(kp.pt.y)), kp.angle, pattern_,
-                      descriptors.ptr<uchar>(static_cast<int>(i)));
+    computeDescriptor(pyramid.blurred[kp.octave], cv::Point(cvRound(kp.pt.x), cvRound(kp.pt.y)), kp.angle,
+                      pattern_x_.data(), pattern_y_.data(), descriptors.ptr<uchar>(static_cast<int>(i)));
     cv::KeyPoint out = kp;
     out.pt = kept[i].level0;
     keypoints.push_back(out);

@@ -71,6 +71,7 @@ class OrbExtractor {
   std::vector<double> level_sigma2_;
   std::vector<double> inv_level_sigma2_;
   std::vector<BriefPair> pattern_;
+  std::vector<float> pattern_x_, pattern_y_;  // the 512 test points, pair i = points 2i and 2i+1
   std::vector<int> circle_half_width_;  // per row v of the radius-15 disc: largest |u| inside
 };
 

@@ -1,13 +1,260 @@
-// TEMPORARY implementation on cv::ORB so that other modules can build against
-// the interface; replaced by our own extractor (even spread, fallback FAST).
+// ORB extraction: per level, FAST in ~30 px cells (fallback threshold where a
+// cell is empty), quadtree distribution to the level's quota, intensity-centroid
+// orientation, rotated BRIEF on the blurred level. See docs/FEATURES.md.
 #include "vslam/feature/orb_extractor.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+#include <random>
+#include <set>
+#include <tuple>
 
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
-namespace vslam {
+#include "vslam/core/error.hpp"
 
-OrbExtractor::OrbExtractor(const OrbParams& params) : params_(params) {
+namespace vslam {
+namespace {
+
+constexpr int kFastMargin = 4;  // FAST's circle radius (3) + 1 so non-max suppression sees all neighbours
+constexpr std::uint32_t kBriefSeed = 20240531u;
+
+// A candidate corner in level pixels, with its level-0 position.
+struct Corner {
+  cv::KeyPoint keypoint;  // in level coordinates
+  cv::Point2f level0;
+};
+
+// Level-0 position of a level pixel. cv::resize (INTER_LINEAR) maps pixel
+// centres, x_prev + 0.5 = (x + 0.5) * W_prev / W, and these ratios chain, so
+// level l relates to level 0 by its size ratio (ORB-SLAM's x * scale is off by
+// up to ~1.3 px at the coarsest level).
+cv::Point2f toLevel0(const cv::Point2f& p, double ratio_x, double ratio_y) {
+  return cv::Point2f(static_cast<float>((p.x + 0.5) * ratio_x - 0.5), static_cast<float>((p.y + 0.5) * ratio_y - 0.5));
+}
+
+// FAST corners of `image` inside `region` (level pixels, already kept
+// kEdgeBorder inside). Runs once at `threshold` over the region, then re-runs at
+// `min_threshold` in each ~30 px cell that got nothing. Because each run scans a
+// window kFastMargin wider than what it keeps, a cell's result equals what a
+// whole-image FAST at that threshold would give there.
+void detectCorners(const cv::Mat& image, const cv::Rect& region, int threshold, int min_threshold, int cell_size,
+                   std::vector<cv::KeyPoint>& corners) {
+  corners.clear();
+  const auto runFast = [&image](const cv::Rect& keep, int fast_threshold, std::vector<cv::KeyPoint>& out) {
+    const cv::Rect window(keep.x - kFastMargin, keep.y - kFastMargin, keep.width + 2 * kFastMargin,
+                          keep.height + 2 * kFastMargin);
+    std::vector<cv::KeyPoint> found;
+    cv::FAST(image(window), found, fast_threshold, true);
+    for (cv::KeyPoint& kp : found) {
+      kp.pt.x += static_cast<float>(window.x);
+      kp.pt.y += static_cast<float>(window.y);
+      if (keep.contains(cv::Point(static_cast<int>(kp.pt.x), static_cast<int>(kp.pt.y)))) out.push_back(kp);
+    }
+  };
+  runFast(region, threshold, corners);
+
+  const int n_cols = std::max(1, static_cast<int>(std::lround(static_cast<double>(region.width) / cell_size)));
+  const int n_rows = std::max(1, static_cast<int>(std::lround(static_cast<double>(region.height) / cell_size)));
+  const auto cellStart = [](int origin, int length, int n, int i) { return origin + (i * length) / n; };
+  // Column/row of each region pixel, so counting is one lookup per corner.
+  std::vector<int> col_of(region.width), row_of(region.height);
+  for (int c = 0; c < n_cols; ++c)
+    for (int x = cellStart(0, region.width, n_cols, c); x < cellStart(0, region.width, n_cols, c + 1); ++x) col_of[x] = c;
+  for (int r = 0; r < n_rows; ++r)
+    for (int y = cellStart(0, region.height, n_rows, r); y < cellStart(0, region.height, n_rows, r + 1); ++y) row_of[y] = r;
+
+  std::vector<int> count(n_cols * n_rows, 0);
+  for (const cv::KeyPoint& kp : corners)
+    ++count[row_of[static_cast<int>(kp.pt.y) - region.y] * n_cols + col_of[static_cast<int>(kp.pt.x) - region.x]];
+  if (min_threshold >= threshold) return;
+  // Re-run in horizontal runs of empty cells: one FAST call per run gives the
+  // same corners as one per cell and saves the per-call overhead.
+  for (int r = 0; r < n_rows; ++r) {
+    const int y0 = cellStart(region.y, region.height, n_rows, r), y1 = cellStart(region.y, region.height, n_rows, r + 1);
+    for (int c = 0; c < n_cols;) {
+      if (count[r * n_cols + c] > 0) {
+        ++c;
+        continue;
+      }
+      int end = c;
+      while (end < n_cols && count[r * n_cols + end] == 0) ++end;
+      const int x0 = cellStart(region.x, region.width, n_cols, c), x1 = cellStart(region.x, region.width, n_cols, end);
+      runFast(cv::Rect(x0, y0, x1 - x0, y1 - y0), min_threshold, corners);
+      c = end;
+    }
+  }
+}
+
+// Keeps at most `quota` corners spread over `area`: splits the area into
+// quadtree nodes, always splitting the largest node that still holds more than
+// one corner (ties: the fuller node, then the older), until there are `quota`
+// non-empty nodes; each node then contributes its strongest corner. Splitting
+// by size rather than by count is what spreads the corners: a sparse region
+// gets as many nodes as a dense one of the same size.
+std::vector<int> distributeQuadtree(const std::vector<Corner>& corners, const cv::Rect2f& area, int quota) {
+  std::vector<int> selected;
+  if (quota <= 0 || corners.empty()) return selected;
+  if (static_cast<int>(corners.size()) <= quota) {
+    for (int i = 0; i < static_cast<int>(corners.size()); ++i) selected.push_back(i);
+    return selected;
+  }
+
+  struct Node {
+    float x0, y0, x1, y1;
+    std::vector<int> members;
+    bool split = false;
+  };
+  std::vector<Node> nodes;
+  // Roughly square roots: one per (width / height), as a wide image would otherwise start with flat nodes.
+  const int n_roots = std::max(1, static_cast<int>(std::lround(area.width / std::max(1.f, area.height))));
+  const float root_width = area.width / static_cast<float>(n_roots);
+  for (int i = 0; i < n_roots; ++i)
+    nodes.push_back(Node{area.x + i * root_width, area.y, area.x + (i + 1) * root_width, area.y + area.height, {}, false});
+  for (int i = 0; i < static_cast<int>(corners.size()); ++i) {
+    const int root = std::min(n_roots - 1, static_cast<int>((corners[i].keypoint.pt.x - area.x) / root_width));
+    nodes[std::max(0, root)].members.push_back(i);
+  }
+  nodes.erase(std::remove_if(nodes.begin(), nodes.end(), [](const Node& n) { return n.members.empty(); }), nodes.end());
+
+  // Priority: larger area first, then more members, then lower index.
+  using Entry = std::tuple<float, int, int>;  // area, members, -index
+  std::priority_queue<Entry> queue;
+  const auto pushIfSplittable = [&](int index) {
+    const Node& n = nodes[index];
+    if (n.members.size() > 1) queue.emplace((n.x1 - n.x0) * (n.y1 - n.y0), static_cast<int>(n.members.size()), -index);
+  };
+  for (int i = 0; i < static_cast<int>(nodes.size()); ++i) pushIfSplittable(i);
+
+  int n_leaves = static_cast<int>(nodes.size());
+  while (n_leaves < quota && !queue.empty()) {
+    const int index = -std::get<2>(queue.top());
+    queue.pop();
+    const float x0 = nodes[index].x0, y0 = nodes[index].y0, x1 = nodes[index].x1, y1 = nodes[index].y1;
+    const float xm = 0.5f * (x0 + x1), ym = 0.5f * (y0 + y1);
+    Node children[4] = {{x0, y0, xm, ym, {}, false}, {xm, y0, x1, ym, {}, false},
+                        {x0, ym, xm, y1, {}, false}, {xm, ym, x1, y1, {}, false}};
+    for (int member : nodes[index].members) {
+      const cv::Point2f& p = corners[member].keypoint.pt;
+      children[(p.x < xm ? 0 : 1) + (p.y < ym ? 0 : 2)].members.push_back(member);
+    }
+    nodes[index].split = true;
+    nodes[index].members.clear();
+    --n_leaves;
+    for (Node& child : children) {
+      if (child.members.empty()) continue;
+      nodes.push_back(std::move(child));
+      ++n_leaves;
+      pushIfSplittable(static_cast<int>(nodes.size()) - 1);
+    }
+  }
+
+  for (const Node& node : nodes) {
+    if (node.split) continue;
+    int best = node.members.front();
+    for (int member : node.members)
+      if (corners[member].keypoint.response > corners[best].keypoint.response) best = member;
+    selected.push_back(best);
+  }
+  // The last split may overshoot by up to 3: drop the weakest.
+  if (static_cast<int>(selected.size()) > quota) {
+    std::stable_sort(selected.begin(), selected.end(), [&corners](int a, int b) {
+      return corners[a].keypoint.response > corners[b].keypoint.response;
+    });
+    selected.resize(quota);
+  }
+  std::sort(selected.begin(), selected.end());  // back to scan order (row-major, as FAST found them)
+  return selected;
+}
+
+// Orientation (degrees, [0, 360)) of the intensity centroid of the radius-15
+// disc around `p`: atan2(m01, m10).
+float centroidAngle(const cv::Mat& image, const cv::Point& p, const std::vector<int>& half_width) {
+  const uchar* centre = image.ptr<uchar>(p.y) + p.x;
+  const int step = static_cast<int>(image.step1());
+  int m10 = 0, m01 = 0;
+  for (int u = -half_width[0]; u <= half_width[0]; ++u) m10 += u * centre[u];
+  for (int v = 1; v < static_cast<int>(half_width.size()); ++v) {
+    int row_difference = 0;  // sum over the row pair of I(u, v) - I(u, -v)
+    const int w = half_width[v];
+    for (int u = -w; u <= w; ++u) {
+      const int below = centre[u + v * step], above = centre[u - v * step];
+      row_difference += below - above;
+      m10 += u * (below + above);
+    }
+    m01 += v * row_difference;
+  }
+  double angle = std::atan2(static_cast<double>(m01), static_cast<double>(m10)) * (180.0 / CV_PI);
+  if (angle < 0) angle += 360.0;
+  if (angle >= 360.0) angle -= 360.0;
+  return static_cast<float>(angle);
+}
+
+// Rounds to nearest (halves up) for |v| < 64; unlike cvRound it vectorises.
+inline int roundSmall(float v) { return static_cast<int>(v + 64.5f) - 64; }
+
+// 256-bit rotated BRIEF. `points_x/y` hold the 512 test points (pair i =
+// points 2i, 2i+1), rotated here by the keypoint angle.
+void computeDescriptor(const cv::Mat& blurred, const cv::Point& p, float angle_deg, const float* points_x,
+                       const float* points_y, uchar* out) {
+  const uchar* centre = blurred.ptr<uchar>(p.y) + p.x;
+  const int step = static_cast<int>(blurred.step1());
+  const float angle = angle_deg * static_cast<float>(CV_PI / 180.0);
+  const float c = std::cos(angle), s = std::sin(angle);
+  int offsets[2 * 256];
+  for (int i = 0; i < 2 * 256; ++i) {
+    const float x = points_x[i] * c - points_y[i] * s;
+    const float y = points_x[i] * s + points_y[i] * c;
+    offsets[i] = roundSmall(y) * step + roundSmall(x);
+  }
+  for (int byte = 0; byte < kOrbDescriptorBytes; ++byte) {
+    const int* o = offsets + 16 * byte;
+    unsigned value = 0;
+    for (int bit = 0; bit < 8; ++bit) value |= static_cast<unsigned>(centre[o[2 * bit]] < centre[o[2 * bit + 1]]) << bit;
+    out[byte] = static_cast<uchar>(value);
+  }
+}
+
+}  // namespace
+
+std::vector<BriefPair> makeBriefPattern() {
+  constexpr int kRadius = OrbExtractor::kPatchRadius;
+  std::mt19937 rng(kBriefSeed);
+  // Irwin-Hall: the sum of 12 uniforms on [0, 1) minus 6 has mean 0, variance 1
+  // and is close to normal. Each uniform is k / 2^32 and the sum needs < 53 bits,
+  // so every step is exact in double arithmetic: the same table everywhere.
+  const auto standardNormal = [&rng]() {
+    double sum = 0.0;
+    for (int i = 0; i < 12; ++i) sum += static_cast<double>(static_cast<std::uint32_t>(rng())) * (1.0 / 4294967296.0);
+    return sum - 6.0;
+  };
+  const double sigma = 31.0 / 5.0;  // BRIEF's G II: sigma^2 = S^2 / 25 for patch size S = 31
+  const auto samplePoint = [&]() {
+    while (true) {
+      const int x = static_cast<int>(std::lround(sigma * standardNormal()));
+      const int y = static_cast<int>(std::lround(sigma * standardNormal()));
+      if (x * x + y * y <= kRadius * kRadius) return cv::Point(x, y);
+    }
+  };
+  std::vector<BriefPair> pattern;
+  std::set<std::tuple<int, int, int, int>> seen;  // a pair and its swap are the same test
+  while (pattern.size() < 256) {
+    const cv::Point a = samplePoint(), b = samplePoint();
+    if (a == b) continue;
+    const bool a_first = std::tie(a.x, a.y) < std::tie(b.x, b.y);
+    const cv::Point lo = a_first ? a : b, hi = a_first ? b : a;
+    if (!seen.emplace(lo.x, lo.y, hi.x, hi.y).second) continue;
+    pattern.push_back(BriefPair{static_cast<std::int8_t>(a.x), static_cast<std::int8_t>(a.y), static_cast<std::int8_t>(b.x),
+                                static_cast<std::int8_t>(b.y)});
+  }
+  return pattern;
+}
+
+OrbExtractor::OrbExtractor(const OrbParams& params) : params_(params), pattern_(makeBriefPattern()) {
+  if (params_.n_levels < 1 || params_.scale_factor <= 1.0 || params_.n_features < 0)
+    throw InputError("orb: need n_levels >= 1, scale_factor > 1 and n_features >= 0");
   double scale = 1.0;
   for (int l = 0; l < params_.n_levels; ++l) {
     scale_factors_.push_back(scale);
@@ -15,31 +262,129 @@ OrbExtractor::OrbExtractor(const OrbParams& params) : params_(params) {
     inv_level_sigma2_.push_back(1.0 / (scale * scale));
     scale *= params_.scale_factor;
   }
+  for (const BriefPair& t : pattern_) {
+    pattern_x_.push_back(t.x1), pattern_y_.push_back(t.y1);
+    pattern_x_.push_back(t.x2), pattern_y_.push_back(t.y2);
+  }
+  // Integer disc u^2 + v^2 <= r^2: symmetric under 90-degree rotations and
+  // transposition, so orientation is exactly rotation-covariant on the grid.
+  for (int v = 0; v <= kPatchRadius; ++v) {
+    int u = 0;
+    while ((u + 1) * (u + 1) + v * v <= kPatchRadius * kPatchRadius) ++u;
+    circle_half_width_.push_back(u);
+  }
 }
 
-ImagePyramid OrbExtractor::buildPyramid(const cv::Mat& gray) const {
-  ImagePyramid pyramid;
-  pyramid.levels.push_back(gray);
-  pyramid.scales = scale_factors_;
-  for (int l = 1; l < params_.n_levels; ++l) {
-    cv::Mat level;
-    cv::resize(gray, level, cv::Size(), 1.0 / scale_factors_[l], 1.0 / scale_factors_[l], cv::INTER_LINEAR);
-    pyramid.levels.push_back(level);
+std::vector<int> OrbExtractor::levelQuotas(int n_features) const {
+  const int n_levels = params_.n_levels;
+  const double ratio = 1.0 / params_.scale_factor;
+  // First term of the series sum_{l<L} a * ratio^l = n_features.
+  const double first = n_features * (1.0 - ratio) / (1.0 - std::pow(ratio, n_levels));
+  std::vector<int> quotas(n_levels, 0);
+  int assigned = 0;
+  double term = first;
+  for (int l = 0; l + 1 < n_levels; ++l) {
+    quotas[l] = static_cast<int>(std::lround(term));
+    assigned += quotas[l];
+    term *= ratio;
   }
+  quotas[n_levels - 1] = std::max(0, n_features - assigned);
+  return quotas;
+}
+
+ImagePyramid OrbExtractor::buildPyramid(const cv::Mat& image) const {
+  cv::Mat gray;
+  if (image.type() == CV_8UC1)
+    gray = image;
+  else if (image.type() == CV_8UC3)
+    cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+  else
+    throw InputError("OrbExtractor::buildPyramid: expected an 8-bit grey or BGR image");
+
+  ImagePyramid pyramid;
+  pyramid.scales = scale_factors_;
+  pyramid.levels.resize(params_.n_levels);
+  pyramid.blurred.resize(params_.n_levels);
+  pyramid.levels[0] = gray;
+  for (int l = 1; l < params_.n_levels; ++l) {
+    // Each level from the previous one (cheaper than from level 0; sizes from level 0 so they do not drift).
+    const cv::Size size(static_cast<int>(std::lround(gray.cols / scale_factors_[l])),
+                        static_cast<int>(std::lround(gray.rows / scale_factors_[l])));
+    cv::resize(pyramid.levels[l - 1], pyramid.levels[l], size, 0, 0, cv::INTER_LINEAR);
+  }
+  for (int l = 0; l < params_.n_levels; ++l)
+    cv::GaussianBlur(pyramid.levels[l], pyramid.blurred[l], cv::Size(7, 7), 2.0, 2.0, cv::BORDER_REFLECT_101);
   return pyramid;
 }
 
 void OrbExtractor::extract(const ImagePyramid& pyramid, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors,
                            const cv::Rect& roi, int n_features) const {
-  const int n = n_features < 0 ? params_.n_features : n_features;
-  auto orb = cv::ORB::create(n, static_cast<float>(params_.scale_factor), params_.n_levels, 19, 0, 2,
-                             cv::ORB::HARRIS_SCORE, 31, params_.fast_threshold);
-  cv::Mat mask;
-  if (!roi.empty()) {
-    mask = cv::Mat::zeros(pyramid.levels[0].size(), CV_8U);
-    mask(roi & cv::Rect(cv::Point(), mask.size())).setTo(255);
+  keypoints.clear();
+  descriptors = cv::Mat();
+  if (pyramid.levels.empty() || pyramid.levels[0].empty()) return;
+  if (static_cast<int>(pyramid.levels.size()) != params_.n_levels ||
+      static_cast<int>(pyramid.blurred.size()) != params_.n_levels)
+    throw InputError("OrbExtractor::extract: pyramid was not built by buildPyramid with these parameters");
+
+  const cv::Mat& base = pyramid.levels[0];
+  const cv::Rect image_rect(0, 0, base.cols, base.rows);
+  const cv::Rect area = roi.empty() ? image_rect : (roi & image_rect);
+  const int wanted = n_features < 0 ? params_.n_features : n_features;
+  if (area.empty() || wanted <= 0) return;
+  const std::vector<int> quotas = levelQuotas(wanted);
+
+  std::vector<Corner> kept;  // all levels, in level order
+  std::vector<Corner> candidates;
+  std::vector<cv::KeyPoint> corners;
+  int carried = 0;  // quota a level could not fill passes on to the next
+  for (int l = 0; l < params_.n_levels; ++l) {
+    const cv::Mat& level = pyramid.levels[l];
+    const double ratio_x = static_cast<double>(base.cols) / level.cols;
+    const double ratio_y = static_cast<double>(base.rows) / level.rows;
+    // The area in level pixels (inverse of toLevel0, rounded outwards), inside the border.
+    const int x0 = static_cast<int>(std::floor((area.x + 0.5) / ratio_x - 0.5));
+    const int y0 = static_cast<int>(std::floor((area.y + 0.5) / ratio_y - 0.5));
+    const int x1 = static_cast<int>(std::ceil((area.x + area.width - 0.5) / ratio_x - 0.5)) + 1;
+    const int y1 = static_cast<int>(std::ceil((area.y + area.height - 0.5) / ratio_y - 0.5)) + 1;
+    const cv::Rect inner(kEdgeBorder, kEdgeBorder, level.cols - 2 * kEdgeBorder, level.rows - 2 * kEdgeBorder);
+    const cv::Rect region = cv::Rect(cv::Point(x0, y0), cv::Point(x1, y1)) & inner;
+    const int quota = quotas[l] + carried;
+    if (region.width <= 0 || region.height <= 0) {
+      carried = quota;
+      continue;
+    }
+
+    detectCorners(level, region, params_.fast_threshold, params_.fast_min_threshold, kCellSize, corners);
+    candidates.clear();
+    for (const cv::KeyPoint& kp : corners) {
+      const cv::Point2f p0 = toLevel0(kp.pt, ratio_x, ratio_y);
+      // Exact ROI test in level-0 coordinates (the level region was rounded outwards).
+      if (p0.x < area.x || p0.y < area.y || p0.x >= area.x + area.width || p0.y >= area.y + area.height) continue;
+      candidates.push_back(Corner{kp, p0});
+    }
+    const std::vector<int> selected = distributeQuadtree(candidates, cv::Rect2f(region), quota);
+    for (int index : selected) kept.push_back(candidates[index]);
+    carried = quota - static_cast<int>(selected.size());
+
+    const float size = static_cast<float>(2 * kPatchRadius + 1) * static_cast<float>(scale_factors_[l]);
+    for (std::size_t i = kept.size() - selected.size(); i < kept.size(); ++i) {
+      cv::KeyPoint& kp = kept[i].keypoint;
+      kp.octave = l;
+      kp.size = size;
+      kp.angle = centroidAngle(level, cv::Point(cvRound(kp.pt.x), cvRound(kp.pt.y)), circle_half_width_);
+    }
   }
-  orb->detectAndCompute(pyramid.levels[0], mask, keypoints, descriptors);
+
+  descriptors.create(static_cast<int>(kept.size()), kOrbDescriptorBytes, CV_8U);
+  keypoints.reserve(kept.size());
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    const cv::KeyPoint& kp = kept[i].keypoint;
+    computeDescriptor(pyramid.blurred[kp.octave], cv::Point(cvRound(kp.pt.x), cvRound(kp.pt.y)), kp.angle,
+                      pattern_x_.data(), pattern_y_.data(), descriptors.ptr<uchar>(static_cast<int>(i)));
+    cv::KeyPoint out = kp;
+    out.pt = kept[i].level0;
+    keypoints.push_back(out);
+  }
 }
 
 }  // namespace vslam

@@ -1,6 +1,7 @@
 #pragma once
 // ORB features: FAST corners spread evenly over every pyramid level, oriented by
 // intensity centroid, described by 256-bit rotated BRIEF.
+#include <cstdint>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -12,12 +13,34 @@ namespace vslam {
 // Image pyramid, built once per frame and shared by whole-frame and per-box
 // extraction (the keypoint filter extracts inside detection boxes).
 struct ImagePyramid {
-  std::vector<cv::Mat> levels;  // levels[0] is the input image (CV_8UC1)
-  std::vector<double> scales;   // scales[l] = scale_factor^l
+  std::vector<cv::Mat> levels;   // levels[0] is the input image (CV_8UC1)
+  std::vector<double> scales;    // scales[l] = scale_factor^l
+  std::vector<cv::Mat> blurred;  // levels[l] smoothed 7x7, sigma 2: what BRIEF samples
 };
+
+// One BRIEF test: bit = I(p1) < I(p2), offsets in pixels from the keypoint
+// before rotation. All points lie within radius 15 of the centre.
+struct BriefPair {
+  std::int8_t x1, y1, x2, y2;
+};
+
+// The 256 BRIEF tests, generated deterministically (see docs/FEATURES.md):
+// both points of a pair drawn from an isotropic Gaussian (sigma = 31/5, BRIEF's
+// "G II"), rejected outside the radius-15 disc, no repeated pair. The normal
+// deviates come from a fixed-seed std::mt19937 summed Irwin-Hall style (12
+// uniforms), which needs no libm call, so the table is the same on every platform.
+std::vector<BriefPair> makeBriefPattern();
+
+constexpr int kOrbDescriptorBytes = 32;
 
 class OrbExtractor {
  public:
+  // Keypoints stay this many pixels inside every level, so the 31x31 patch
+  // (rotated: radius <= 15.7 after rounding) never leaves the image.
+  static constexpr int kEdgeBorder = 19;
+  static constexpr int kPatchRadius = 15;
+  static constexpr int kCellSize = 30;  // FAST cells, in level pixels
+
   explicit OrbExtractor(const OrbParams& params);
 
   ImagePyramid buildPyramid(const cv::Mat& gray) const;
@@ -37,12 +60,19 @@ class OrbExtractor {
   const std::vector<double>& scaleFactors() const { return scale_factors_; }
   const std::vector<double>& levelSigma2() const { return level_sigma2_; }          // scale^2
   const std::vector<double>& invLevelSigma2() const { return inv_level_sigma2_; }
+  // Features each level should receive out of n_features: a geometric series
+  // with ratio 1/scale_factor (finer levels get more), summing to n_features.
+  std::vector<int> levelQuotas(int n_features) const;
+  const std::vector<BriefPair>& pattern() const { return pattern_; }
 
  private:
   OrbParams params_;
   std::vector<double> scale_factors_;
   std::vector<double> level_sigma2_;
   std::vector<double> inv_level_sigma2_;
+  std::vector<BriefPair> pattern_;
+  std::vector<float> pattern_x_, pattern_y_;  // the 512 test points, pair i = points 2i and 2i+1
+  std::vector<int> circle_half_width_;  // per row v of the radius-15 disc: largest |u| inside
 };
 
 }  // namespace vslam

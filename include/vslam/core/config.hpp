@@ -25,6 +25,9 @@ struct InitializerParams {
   int min_matches = 100;
   double min_parallax_deg = 1.0;
   int min_triangulated = 50;
+  // Two-view geometry (geometry module); ORB-SLAM's values, the paper gives none.
+  double min_point_parallax_deg = 0.36;  // a point counts as triangulated above this (cos 0.99998)
+  double max_second_best_ratio = 0.7;    // motion is ambiguous if the runner-up has more than this x the best's points
 };
 
 struct TrackingParams {

@@ -1,0 +1,146 @@
+// Text format of a recorded bundle problem (one record per line, '#' lines ignored):
+//   vslam_bundle_problem 1
+//   camera fx fy cx cy width height bf
+//   keyframes N
+//   id fixed fix_translation_norm r00 r01 r02 r10 r11 r12 r20 r21 r22 tx ty tz   (N lines, R and t of T_cw)
+//   points M
+//   id fixed x y z                                                               (M lines)
+//   observations K
+//   keyframe_index point_index u v inv_sigma2 u_right                             (K lines)
+// Numbers are written with 17 significant digits, so a save/load round trip is exact.
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
+#include "vslam/core/error.hpp"
+#include "vslam/optimize/bundle_adjuster.hpp"
+
+namespace vslam {
+namespace {
+
+constexpr const char* kMagic = "vslam_bundle_problem";
+constexpr int kVersion = 1;
+
+// Reads the file line by line, skipping comments, and reports errors with the line number.
+class LineReader {
+ public:
+  explicit LineReader(const std::string& path) : path_(path), in_(path) {
+    if (!in_) throw InputError(path_, 0, "cannot open bundle problem file");
+  }
+
+  std::istringstream next(const char* what) {
+    std::string line;
+    while (std::getline(in_, line)) {
+      ++line_number_;
+      if (!line.empty() && line[0] != '#') return std::istringstream(line);
+    }
+    throw InputError(path_, line_number_, std::string("unexpected end of file, expected ") + what);
+  }
+
+  template <typename... Values>
+  void parse(std::istringstream& line, const char* what, Values&... values) {
+    (line >> ... >> values);
+    if (line.fail()) fail(std::string("malformed ") + what);
+  }
+
+  // "<keyword> <count>" header line.
+  size_t count(const char* keyword) {
+    std::istringstream line = next(keyword);
+    std::string word;
+    long n = -1;
+    line >> word >> n;
+    if (line.fail() || word != keyword || n < 0) fail(std::string("expected '") + keyword + " <count>'");
+    return static_cast<size_t>(n);
+  }
+
+  [[noreturn]] void fail(const std::string& what) const { throw InputError(path_, line_number_, what); }
+
+ private:
+  std::string path_;
+  std::ifstream in_;
+  int line_number_ = 0;
+};
+
+}  // namespace
+
+void saveBundleProblem(const std::string& path, const PinholeCamera& camera, double bf,
+                       const BundleProblem& problem) {
+  std::ofstream out(path);
+  if (!out) throw InputError(path, 0, "cannot write bundle problem file");
+  out << std::setprecision(std::numeric_limits<double>::max_digits10);
+  out << kMagic << ' ' << kVersion << '\n';
+  out << "camera " << camera.fx << ' ' << camera.fy << ' ' << camera.cx << ' ' << camera.cy << ' ' << camera.width
+      << ' ' << camera.height << ' ' << bf << '\n';
+  out << "keyframes " << problem.keyframes.size() << '\n';
+  for (const BaKeyframe& kf : problem.keyframes) {
+    out << kf.id << ' ' << kf.fixed << ' ' << kf.fix_translation_norm;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) out << ' ' << kf.T_cw.R(r, c);
+    }
+    out << ' ' << kf.T_cw.t.x() << ' ' << kf.T_cw.t.y() << ' ' << kf.T_cw.t.z() << '\n';
+  }
+  out << "points " << problem.points.size() << '\n';
+  for (const BaPoint& point : problem.points) {
+    out << point.id << ' ' << point.fixed << ' ' << point.position_w.x() << ' ' << point.position_w.y() << ' '
+        << point.position_w.z() << '\n';
+  }
+  out << "observations " << problem.observations.size() << '\n';
+  for (const BaObservation& obs : problem.observations) {
+    out << obs.keyframe << ' ' << obs.point << ' ' << obs.pixel.x() << ' ' << obs.pixel.y() << ' ' << obs.inv_sigma2
+        << ' ' << obs.u_right << '\n';
+  }
+  if (!out) throw InputError(path, 0, "error while writing bundle problem file");
+}
+
+RecordedBundleProblem loadBundleProblem(const std::string& path) {
+  LineReader reader(path);
+  RecordedBundleProblem recorded;
+  {
+    std::istringstream line = reader.next("header");
+    std::string magic;
+    int version = 0;
+    line >> magic >> version;
+    if (magic != kMagic || version != kVersion) {
+      reader.fail(std::string("not a '") + kMagic + " " + std::to_string(kVersion) + "' file");
+    }
+  }
+  {
+    std::istringstream line = reader.next("camera");
+    std::string word;
+    PinholeCamera& camera = recorded.camera;
+    reader.parse(line, "camera line", word, camera.fx, camera.fy, camera.cx, camera.cy, camera.width,
+                 camera.height, recorded.bf);
+    if (word != "camera") reader.fail("expected 'camera fx fy cx cy width height bf'");
+  }
+  BundleProblem& problem = recorded.problem;
+  problem.keyframes.resize(reader.count("keyframes"));
+  for (BaKeyframe& kf : problem.keyframes) {
+    std::istringstream line = reader.next("keyframe");
+    Mat3& R = kf.T_cw.R;
+    Vec3& t = kf.T_cw.t;
+    reader.parse(line, "keyframe line", kf.id, kf.fixed, kf.fix_translation_norm, R(0, 0), R(0, 1), R(0, 2),
+                 R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1), R(2, 2), t.x(), t.y(), t.z());
+  }
+  problem.points.resize(reader.count("points"));
+  for (BaPoint& point : problem.points) {
+    std::istringstream line = reader.next("point");
+    Vec3& p = point.position_w;
+    reader.parse(line, "point line", point.id, point.fixed, p.x(), p.y(), p.z());
+  }
+  problem.observations.resize(reader.count("observations"));
+  const int n_keyframes = static_cast<int>(problem.keyframes.size());
+  const int n_points = static_cast<int>(problem.points.size());
+  for (BaObservation& obs : problem.observations) {
+    std::istringstream line = reader.next("observation");
+    reader.parse(line, "observation line", obs.keyframe, obs.point, obs.pixel.x(), obs.pixel.y(), obs.inv_sigma2,
+                 obs.u_right);
+    if (obs.keyframe < 0 || obs.keyframe >= n_keyframes || obs.point < 0 || obs.point >= n_points) {
+      reader.fail("observation index out of range");
+    }
+  }
+  return recorded;
+}
+
+}  // namespace vslam

@@ -1,0 +1,151 @@
+// Analytic Jacobians and manifolds against central finite differences.
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "optimize_synthetic.hpp"
+#include "vslam/optimize/reprojection.hpp"
+
+namespace vslam {
+namespace {
+
+using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+const SE3 kPose(test::rotationAbout(Vec3(0.3, -1, 0.2), 0.7), Vec3(0.4, -0.3, 1.2));
+const Vec3 kPointW(0.5, -0.4, 4.0);
+
+ProjectionModel model() { return ProjectionModel(test::syntheticCamera(), 40.0); }
+
+template <int kResiduals>
+Eigen::VectorXd residualAt(const ceres::CostFunction& cost, const double* pose, const double* point) {
+  Eigen::VectorXd r(kResiduals);
+  const double* parameters[] = {pose, point};
+  EXPECT_TRUE(cost.Evaluate(parameters, r.data(), nullptr));
+  return r;
+}
+
+// Numeric Jacobian of the residual with respect to the tangent of `manifold` at the pose.
+template <int kResiduals>
+RowMajorMatrix numericPoseJacobian(const ceres::CostFunction& cost, const ceres::Manifold& manifold,
+                                   const PoseParameters& pose, const Vec3& point) {
+  const double h = 1e-6;
+  RowMajorMatrix J(kResiduals, manifold.TangentSize());
+  for (int i = 0; i < manifold.TangentSize(); ++i) {
+    Eigen::VectorXd delta = Eigen::VectorXd::Zero(manifold.TangentSize());
+    PoseParameters plus, minus;
+    delta[i] = h;
+    manifold.Plus(pose.data(), delta.data(), plus.data());
+    delta[i] = -h;
+    manifold.Plus(pose.data(), delta.data(), minus.data());
+    J.col(i) = (residualAt<kResiduals>(cost, plus.data(), point.data()) -
+                residualAt<kResiduals>(cost, minus.data(), point.data())) /
+               (2 * h);
+  }
+  return J;
+}
+
+// The Jacobian Ceres works with: ambient residual Jacobian times PlusJacobian.
+template <int kResiduals>
+RowMajorMatrix analyticTangentJacobian(const ceres::CostFunction& cost, const ceres::Manifold& manifold,
+                                       const PoseParameters& pose, const Vec3& point, RowMajorMatrix* d_point) {
+  Eigen::VectorXd r(kResiduals);
+  RowMajorMatrix ambient(kResiduals, kPoseParameterSize);
+  d_point->resize(kResiduals, 3);
+  const double* parameters[] = {pose.data(), point.data()};
+  double* jacobians[] = {ambient.data(), d_point->data()};
+  EXPECT_TRUE(cost.Evaluate(parameters, r.data(), jacobians));
+  RowMajorMatrix plus_jacobian(kPoseParameterSize, manifold.TangentSize());
+  manifold.PlusJacobian(pose.data(), plus_jacobian.data());
+  return ambient * plus_jacobian;
+}
+
+template <int kResiduals>
+void checkJacobians(const ceres::Manifold& manifold) {
+  const ProjectionModel m = model();
+  const Vec3 p_c = kPose * kPointW;
+  const Vec2 pixel = Vec2(m.fx * p_c.x() / p_c.z() + m.cx, m.fy * p_c.y() / p_c.z() + m.cy) + Vec2(3.0, -2.0);
+  const ReprojectionCost<kResiduals> cost(m, pixel, pixel.x() - m.bf / p_c.z() + 1.5, 0.7);
+  const PoseParameters pose = poseToParameters(kPose);
+  RowMajorMatrix d_point;
+  const RowMajorMatrix d_pose = analyticTangentJacobian<kResiduals>(cost, manifold, pose, kPointW, &d_point);
+  const RowMajorMatrix d_pose_numeric = numericPoseJacobian<kResiduals>(cost, manifold, pose, kPointW);
+  EXPECT_LT((d_pose - d_pose_numeric).cwiseAbs().maxCoeff(), 1e-5 * d_pose.cwiseAbs().maxCoeff())
+      << "analytic\n" << d_pose << "\nnumeric\n" << d_pose_numeric;
+
+  const double h = 1e-6;
+  RowMajorMatrix d_point_numeric(kResiduals, 3);
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 step = h * Vec3::Unit(i);
+    const Vec3 plus = kPointW + step, minus = kPointW - step;
+    d_point_numeric.col(i) = (residualAt<kResiduals>(cost, pose.data(), plus.data()) -
+                              residualAt<kResiduals>(cost, pose.data(), minus.data())) /
+                             (2 * h);
+  }
+  EXPECT_LT((d_point - d_point_numeric).cwiseAbs().maxCoeff(), 1e-5 * d_point.cwiseAbs().maxCoeff());
+}
+
+TEST(Reprojection, MonoJacobiansMatchFiniteDifferences) { checkJacobians<2>(PoseManifold()); }
+TEST(Reprojection, StereoJacobiansMatchFiniteDifferences) { checkJacobians<3>(PoseManifold()); }
+TEST(Reprojection, JacobiansThroughFixedNormManifold) {
+  checkJacobians<2>(PoseFixedTranslationNormManifold());
+  checkJacobians<3>(PoseFixedTranslationNormManifold());
+}
+
+TEST(Reprojection, ResidualIsWhitenedPredictionMinusMeasurement) {
+  const ProjectionModel m = model();
+  const Vec3 p_c = kPose * kPointW;
+  const Vec2 predicted(m.fx * p_c.x() / p_c.z() + m.cx, m.fy * p_c.y() / p_c.z() + m.cy);
+  const double u_right_predicted = predicted.x() - m.bf / p_c.z();
+  const ReprojectionCost<3> cost(m, predicted - Vec2(2, 1), u_right_predicted + 3, 0.25);
+  const PoseParameters pose = poseToParameters(kPose);
+  const Eigen::VectorXd r = residualAt<3>(cost, pose.data(), kPointW.data());
+  EXPECT_NEAR(r[0], 1.0, 1e-9);
+  EXPECT_NEAR(r[1], 0.5, 1e-9);
+  EXPECT_NEAR(r[2], -1.5, 1e-9);
+  const ReprojectionCheck check = checkReprojection(m, kPose, kPointW, predicted - Vec2(2, 1),
+                                                    u_right_predicted + 3, 0.25);
+  EXPECT_NEAR(check.chi2, 1.0 + 0.25 + 2.25, 1e-9);
+  EXPECT_TRUE(check.depth_positive);
+}
+
+TEST(Reprojection, PointBehindCameraGivesZeroResidualAndJacobian) {
+  const ReprojectionCost<2> cost(model(), Vec2(320, 240), -1, 1.0);
+  const PoseParameters pose = poseToParameters(SE3());
+  const Vec3 behind(0.1, 0.2, -3.0);
+  Eigen::Vector2d r;
+  RowMajorMatrix d_pose(2, 7), d_point(2, 3);
+  const double* parameters[] = {pose.data(), behind.data()};
+  double* jacobians[] = {d_pose.data(), d_point.data()};
+  ASSERT_TRUE(cost.Evaluate(parameters, r.data(), jacobians));
+  EXPECT_EQ(r, Eigen::Vector2d::Zero());
+  EXPECT_EQ(d_pose.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(d_point.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_FALSE(checkReprojection(model(), SE3(), behind, Vec2(320, 240), -1, 1.0).depth_positive);
+}
+
+TEST(Reprojection, ManifoldMinusInvertsPlus) {
+  const PoseParameters x = poseToParameters(kPose);
+  const double delta6[] = {0.01, -0.02, 0.03, 0.05, -0.01, 0.02};
+  PoseParameters y;
+  double back[6];
+  const PoseManifold manifold;
+  manifold.Plus(x.data(), delta6, y.data());
+  ASSERT_TRUE(manifold.Minus(y.data(), x.data(), back));
+  for (int i = 0; i < 6; ++i) EXPECT_NEAR(back[i], delta6[i], 1e-12);
+
+  const PoseFixedTranslationNormManifold fixed_norm;
+  const double delta5[] = {0.01, -0.02, 0.03, 0.05, -0.01};
+  fixed_norm.Plus(x.data(), delta5, y.data());
+  EXPECT_NEAR(Vec3(y[4], y[5], y[6]).norm(), kPose.t.norm(), 1e-14);
+  ASSERT_TRUE(fixed_norm.Minus(y.data(), x.data(), back));
+  for (int i = 0; i < 5; ++i) EXPECT_NEAR(back[i], delta5[i], 1e-12);
+}
+
+TEST(Reprojection, PoseParametersRoundTrip) {
+  const SE3 back = poseFromParameters(poseToParameters(kPose).data());
+  EXPECT_LT((back.R - kPose.R).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_EQ(back.t, kPose.t);
+}
+
+}  // namespace
+}  // namespace vslam

@@ -7,6 +7,16 @@
 
 #include "vslam/core/error.hpp"
 
+// The brute-force loops are dominated by hammingDistance. Unless the whole build
+// targets a CPU with POPCNT (-mpopcnt, -march=x86-64-v2), GCC expands
+// __builtin_popcountll to ~12 bit operations; cloning these functions for POPCNT
+// (picked at load time, with a plain fallback) makes them ~5x faster.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && !defined(__POPCNT__)
+#define VSLAM_POPCNT_CLONES __attribute__((target_clones("popcnt", "default")))
+#else
+#define VSLAM_POPCNT_CLONES
+#endif
+
 namespace vslam {
 namespace {
 
@@ -151,7 +161,7 @@ std::vector<int> RotationHistogram::consistentMatches() const {
 
 // -------------------------------------------------------------- matchInWindow
 
-WindowMatches matchInWindow(const FeatureView& frame1, const FeatureView& frame2, const FeatureGrid& grid2,
+VSLAM_POPCNT_CLONES WindowMatches matchInWindow(const FeatureView& frame1, const FeatureView& frame2, const FeatureGrid& grid2,
                             std::vector<cv::Point2f>& prev_matched, const WindowMatchParams& params) {
   checkView(frame1, "matchInWindow (frame 1)");
   checkView(frame2, "matchInWindow (frame 2)");
@@ -211,7 +221,7 @@ WindowMatches matchInWindow(const FeatureView& frame1, const FeatureView& frame2
 
 // --------------------------------------------------------------- matchByRatio
 
-std::vector<cv::DMatch> matchByRatio(const cv::Mat& descriptors1, const cv::Mat& descriptors2, float ratio,
+VSLAM_POPCNT_CLONES std::vector<cv::DMatch> matchByRatio(const cv::Mat& descriptors1, const cv::Mat& descriptors2, float ratio,
                                      int max_distance) {
   checkDescriptors(descriptors1, static_cast<std::size_t>(descriptors1.rows), "matchByRatio (set 1)");
   checkDescriptors(descriptors2, static_cast<std::size_t>(descriptors2.rows), "matchByRatio (set 2)");
@@ -266,7 +276,7 @@ double epipolarDistanceSquared(const cv::Matx33d& F21, const cv::Point2f& p1, co
 
 // ---------------------------------------------------- searchForTriangulation
 
-std::vector<std::pair<int, int>> searchForTriangulation(const FeatureView& view1, const FeatureView& view2,
+VSLAM_POPCNT_CLONES std::vector<std::pair<int, int>> searchForTriangulation(const FeatureView& view1, const FeatureView& view2,
                                                         const cv::Matx33d& F21, const std::vector<double>& level_sigma2,
                                                         const std::vector<bool>& matched1,
                                                         const std::vector<bool>& matched2,
@@ -300,6 +310,13 @@ std::vector<std::pair<int, int>> searchForTriangulation(const FeatureView& view1
     }
     usable2.push_back(i2);
   }
+  // Their positions and squared line tolerances, contiguous for the inner loop.
+  std::vector<double> usable_x, usable_y, usable_tolerance2;
+  for (int i2 : usable2) {
+    usable_x.push_back(view2.points[i2].x);
+    usable_y.push_back(view2.points[i2].y);
+    usable_tolerance2.push_back(kChi2OneDof95 * sigma2Of(view2.keypoints[i2].octave));
+  }
 
   std::vector<int> matches12(n1, -1);
   std::vector<int> matches21(n2, -1);
@@ -311,12 +328,14 @@ std::vector<std::pair<int, int>> searchForTriangulation(const FeatureView& view1
     const double line_norm2 = line[0] * line[0] + line[1] * line[1];
     if (line_norm2 <= 0) continue;
     int best = std::numeric_limits<int>::max(), second = std::numeric_limits<int>::max(), best_i2 = -1;
-    for (int i2 : usable2) {
-      const int d = hammingDistance(row(view1.descriptors, i1), row(view2.descriptors, i2));
-      if (d >= second) continue;  // cannot change best or second: skip the geometry
-      const cv::Point2f& p2 = view2.points[i2];
-      const double residual = line[0] * p2.x + line[1] * p2.y + line[2];
-      if (residual * residual >= kChi2OneDof95 * sigma2Of(view2.keypoints[i2].octave) * line_norm2) continue;
+    const std::uint8_t* descriptor1 = row(view1.descriptors, i1);
+    for (std::size_t k = 0; k < usable2.size(); ++k) {
+      // The line test first: a few flops that reject almost every candidate.
+      const double residual = line[0] * usable_x[k] + line[1] * usable_y[k] + line[2];
+      if (residual * residual >= usable_tolerance2[k] * line_norm2) continue;
+      const int i2 = usable2[k];
+      const int d = hammingDistance(descriptor1, row(view2.descriptors, i2));
+      if (d >= second) continue;
       if (d < best) {
         second = best, best = d, best_i2 = i2;
       } else {

@@ -33,8 +33,7 @@ PlotCanvas::PlotCanvas(const PlotProjection& projection)
   glLoadIdentity();
   glDepthFunc(GL_LEQUAL);
   glDisable(GL_DEPTH_TEST);
-  // Round points need blending of their antialiased rim.
-  glEnable(GL_POINT_SMOOTH);
+  // Round (smooth) points need blending of their antialiased rim.
   glEnable(GL_BLEND);
   glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
 }
@@ -81,7 +80,7 @@ void PlotCanvas::drawColouredPolyline(const std::vector<Vec3>& points, const std
     vertex(points[i]);
   }
   glEnd();
-  drawPoints(points, bgr, width_px);
+  drawPoints(points, bgr, width_px, /*round=*/true);
 }
 
 void PlotCanvas::drawSegments(const std::vector<Vec3>& endpoints, const cv::Scalar& bgr, double width_px) {
@@ -95,8 +94,13 @@ void PlotCanvas::drawSegments(const std::vector<Vec3>& endpoints, const cv::Scal
   glEnd();
 }
 
-void PlotCanvas::drawPoints(const std::vector<Vec3>& points, const std::vector<cv::Scalar>& bgr, double size_px) {
+void PlotCanvas::drawPoints(const std::vector<Vec3>& points, const std::vector<cv::Scalar>& bgr, double size_px,
+                            bool round) {
   if (bgr.size() != points.size()) return;
+  if (round)
+    glEnable(GL_POINT_SMOOTH);
+  else
+    glDisable(GL_POINT_SMOOTH);
   glPointSize(static_cast<float>(size_px * kSupersampling));
   glBegin(GL_POINTS);
   for (size_t i = 0; i < points.size(); ++i) {

@@ -44,7 +44,9 @@ class PlotCanvas {
   void drawColouredPolyline(const std::vector<Vec3>& points, const std::vector<cv::Scalar>& bgr, double width_px);
   // Pairs of endpoints.
   void drawSegments(const std::vector<Vec3>& endpoints, const cv::Scalar& bgr, double width_px);
-  void drawPoints(const std::vector<Vec3>& points, const std::vector<cv::Scalar>& bgr, double size_px);
+  // Square points by default (solid at small sizes); round ones are antialiased.
+  void drawPoints(const std::vector<Vec3>& points, const std::vector<cv::Scalar>& bgr, double size_px,
+                  bool round = false);
   // A grid of lines on the plane `plane_axis_value` along plane.toward_viewer,
   // lines every `step` over [low_right, high_right] x [low_up, high_up].
   void drawGroundGrid(const TopPlane& plane, double plane_axis_value, double low_right, double high_right,

@@ -93,6 +93,24 @@ TEST(RenderTrajectory, TopViewStraightLineLandsWhereProjected) {
   }
 }
 
+TEST(RenderTrajectory, TopViewGridIsDrawnWhereverTheSceneIs) {
+  // Far from the origin along the viewing axis: the grid must still be inside the clip volume.
+  TrajectoryPlotInput input = straightLine();
+  for (auto* path : {&input.estimate, &input.groundtruth})
+    for (Vec3& p : *path) p.z() += 40.0;
+  PlotProjection projection;
+  const cv::Mat image = renderTrajectoryPlot(input, PlotView::Top, {1280, 960}, &projection);
+  double low_right, high_right, low_up, high_up;
+  topViewWorldRange(projection, plotArea(image.size(), PlotMargins{}), low_right, high_right, low_up, high_up);
+  const double step = niceTickStep(std::max(high_right - low_right, high_up - low_up), 8);
+  const double grid_x = ticksIn(0.12, 0.9, step).at(0);
+  const cv::Point2d on_grid = projection.toPixel(Vec3(grid_x, -0.13, 40.0));
+  int nearest = 1000;
+  for (int dx = -1; dx <= 1; ++dx)
+    nearest = std::min(nearest, colourDistance(pixelAt(image, on_grid + cv::Point2d(dx, 0)), toVec3b(plot_colour::kGrid)));
+  EXPECT_LE(nearest, 6) << "grid line x = " << grid_x;
+}
+
 TEST(RenderTrajectory, EstimateIsColouredByItsError) {
   TrajectoryPlotInput input = straightLine();
   for (int i = 0; i <= 10; ++i) input.error_m.push_back(0.002 * i);  // 0 .. 2 cm

@@ -223,7 +223,7 @@ cv::Mat renderMap(const MapRenderInput& input, MapColouring colouring, PlotView 
   PlotCanvas canvas(projection);
   if (view == PlotView::Top) {
     canvas.clipTo(area);  // stray points must not spill over the axes
-    canvas.drawGroundGrid(projection.plane, 0.0, low_right, high_right, low_up, high_up, tick_step,
+    canvas.drawGroundGrid(projection.plane, projection.plane_level, low_right, high_right, low_up, high_up, tick_step,
                           plot_colour::kGrid, 1.0);
   } else {
     drawGroundGrid(canvas, grid);

@@ -77,6 +77,7 @@ PlotProjection fitTopView(const std::vector<Vec3>& points, cv::Size image_size, 
   // Depth: nearer the viewer = smaller NDC z; generous so nothing is clipped.
   const double depth_half_range = 2.0 * std::max(bounds.extent().maxCoeff(), kMinimumSpanM);
   const double depth_centre = plane.toward_viewer.dot(centre);
+  projection.plane_level = depth_centre;
 
   Mat4& m = projection.world_to_clip;
   m.setZero();

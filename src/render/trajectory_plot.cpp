@@ -93,7 +93,7 @@ cv::Mat renderTop(const TrajectoryPlotInput& input, cv::Size size, PlotProjectio
 
   PlotCanvas canvas(projection);
   canvas.clipTo(area);
-  canvas.drawGroundGrid(projection.plane, 0.0, low_right, high_right, low_up, high_up, tick_step,
+  canvas.drawGroundGrid(projection.plane, projection.plane_level, low_right, high_right, low_up, high_up, tick_step,
                         plot_colour::kGrid, 1.0);
   drawPaths(canvas, input);
   cv::Mat image = canvas.finish();

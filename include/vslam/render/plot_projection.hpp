@@ -37,6 +37,9 @@ struct PlotProjection {
   Mat4 world_to_clip = Mat4::Identity();
   cv::Size image_size;
   TopPlane plane;  // the scene's plane (top view: the one shown; perspective: the ground)
+  // Top view: the middle of the scene along plane.toward_viewer, a depth
+  // inside the clip volume for flat things such as the grid.
+  double plane_level = 0.0;
 
   // OpenCV pixel coordinates (x right, y down, pixel centres at integers).
   cv::Point2d toPixel(const Vec3& world) const;

@@ -1,0 +1,165 @@
+#pragma once
+// Matching primitives over keypoints and 32-byte ORB descriptors, free of map
+// types: Hamming distance, a grid for area queries, the rotation-consistency
+// check, window matching for map initialisation, brute-force ratio matching and
+// the epipolar search for triangulation. Positions are undistorted pixels.
+#include <cstdint>
+#include <cstring>
+#include <utility>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "vslam/core/camera.hpp"
+#include "vslam/core/types.hpp"
+
+namespace vslam {
+
+constexpr int kHammingThresholdLow = 50;    // a confident match (ORB-SLAM's TH_LOW)
+constexpr int kHammingThresholdHigh = 100;  // a loose one, for search by projection (TH_HIGH)
+constexpr double kChi2OneDof95 = 3.84;      // epipolar distance^2 < 3.84 sigma^2 (95 %, 1 DoF)
+
+// Bits that differ between two 32-byte descriptors.
+inline int hammingDistance(const std::uint8_t* a, const std::uint8_t* b) {
+  int distance = 0;
+  for (int i = 0; i < 4; ++i) {
+    std::uint64_t wa, wb;  // memcpy: descriptor rows need not be 8-byte aligned
+    std::memcpy(&wa, a + 8 * i, 8);
+    std::memcpy(&wb, b + 8 * i, 8);
+    distance += __builtin_popcountll(wa ^ wb);
+  }
+  return distance;
+}
+// Rows of CV_8U descriptor matrices (1 x 32).
+inline int hammingDistance(const cv::Mat& a_row, const cv::Mat& b_row) {
+  CV_DbgAssert(a_row.type() == CV_8U && b_row.type() == CV_8U && a_row.total() == 32 && b_row.total() == 32);
+  return hammingDistance(a_row.ptr<std::uint8_t>(), b_row.ptr<std::uint8_t>());
+}
+
+// The features of one frame or keyframe as the matchers see them.
+struct FeatureView {
+  const std::vector<cv::KeyPoint>& keypoints;  // octave (level) and angle are used; pt is not
+  const std::vector<cv::Point2f>& points;      // undistorted positions, same order
+  const cv::Mat& descriptors;                  // one 32-byte row per keypoint
+};
+
+// Image bounds of the undistorted keypoints: the box around the undistorted
+// image border (wider or narrower than the image under distortion).
+cv::Rect2f undistortedImageBounds(const PinholeCamera& camera);
+
+// Features bucketed in cells over the image for fast area queries.
+class FeatureGrid {
+ public:
+  FeatureGrid() = default;
+  // `levels` may be empty (all level 0). Points outside `bounds` go to the
+  // nearest border cell, so a query never misses one.
+  FeatureGrid(std::vector<cv::Point2f> points, std::vector<int> levels, const cv::Rect2f& bounds, int cols = 64,
+              int rows = 48);
+
+  // Indices of the features with |x - px| <= radius and |y - py| <= radius
+  // (a square, as ORB-SLAM's search window) and min_level <= level <= max_level;
+  // a negative bound is no bound. Ordered by cell, then by index.
+  std::vector<int> featuresInArea(float x, float y, float radius, int min_level = -1, int max_level = -1) const;
+
+  int size() const { return static_cast<int>(points_.size()); }
+  const cv::Point2f& point(int index) const { return points_[index]; }
+  int level(int index) const { return levels_.empty() ? 0 : levels_[index]; }
+
+ private:
+  int cellCol(float x) const;
+  int cellRow(float y) const;
+
+  std::vector<cv::Point2f> points_;
+  std::vector<int> levels_;
+  cv::Rect2f bounds_;
+  int cols_ = 0, rows_ = 0;
+  std::vector<int> cell_begin_;  // features of cell c: cell_items_[cell_begin_[c], cell_begin_[c + 1])
+  std::vector<int> cell_items_;
+};
+
+// Rotation consistency: true matches between two views share one in-plane
+// rotation, so their angle differences pile up in one histogram bin (or its
+// neighbours). Keeps the three fullest bins, the second and third only when
+// they hold at least a tenth of the first (ORB-SLAM's rule); the rest are
+// rejected. Bins are centred: bin 0 holds differences within +-6 degrees of 0.
+class RotationHistogram {
+ public:
+  explicit RotationHistogram(int bins = 30);
+
+  // Adds a match by the angles (degrees) of its two keypoints.
+  void add(float angle1_deg, float angle2_deg, int match_index);
+  int binOf(float angle1_deg, float angle2_deg) const;
+
+  std::vector<int> keptBins() const;             // fullest first
+  std::vector<int> rejectedMatches() const;      // match indices outside the kept bins, ascending
+  std::vector<int> consistentMatches() const;    // the others, ascending
+
+ private:
+  std::vector<std::vector<int>> bins_;
+};
+
+struct WindowMatchParams {
+  float window = 100.f;  // px around the previous position (ORB-SLAM initialisation: 100)
+  float ratio = 0.9f;    // best < ratio * second best
+  int max_distance = kHammingThresholdLow;
+  bool check_orientation = true;
+};
+
+struct WindowMatches {
+  std::vector<int> matches12;  // per frame-1 feature: index in frame 2, or -1
+  int count = 0;
+};
+
+// Matching for map initialisation. For every level-0 feature of frame 1,
+// candidates are the level-0 features of frame 2 (from grid2) within `window` of
+// prev_matched[i1] (start with frame 1's own points). The best must pass the
+// absolute threshold and the ratio test; a frame-2 feature claimed twice keeps
+// the closer; survivors pass the rotation check. prev_matched is updated to the
+// matched positions in frame 2, as ORB-SLAM does, for the next frame's search.
+WindowMatches matchInWindow(const FeatureView& frame1, const FeatureView& frame2, const FeatureGrid& grid2,
+                            std::vector<cv::Point2f>& prev_matched, const WindowMatchParams& params = {});
+
+// Brute force, for small sets: each row of desc1 to its nearest row of desc2
+// when the distance is <= max_distance and < ratio * second nearest; a row of
+// desc2 claimed twice keeps the closer. DMatch: queryIdx in 1, trainIdx in 2.
+std::vector<cv::DMatch> matchByRatio(const cv::Mat& descriptors1, const cv::Mat& descriptors2, float ratio,
+                                     int max_distance);
+
+// --- Epipolar geometry. F21 maps a point of image 1 to its epipolar line in
+// image 2, l2 = F21 (x1, y1, 1)^T, so that x2^T F21 x1 = 0: the convention of
+// cv::findFundamentalMat(points1, points2).
+
+// From the world->camera poses of the two views and their intrinsics.
+cv::Matx33d fundamentalFromPoses(const SE3& T_1w, const SE3& T_2w, const Mat3& K1, const Mat3& K2);
+
+// Squared pixel distance from p2 to the epipolar line of p1 (infinite for a
+// degenerate line).
+double epipolarDistanceSquared(const cv::Matx33d& F21, const cv::Point2f& p1, const cv::Point2f& p2);
+
+// The 3.84 sigma^2 rule: sigma2_level2 is the variance of p2's level (scale^2).
+inline bool isEpipolarConsistent(const cv::Matx33d& F21, const cv::Point2f& p1, const cv::Point2f& p2,
+                                 double sigma2_level2) {
+  return epipolarDistanceSquared(F21, p1, p2) < kChi2OneDof95 * sigma2_level2;
+}
+
+struct TriangulationSearchParams {
+  float ratio = 0.8f;  // among the epipolar-consistent candidates
+  int max_distance = kHammingThresholdLow;
+  double min_epipole_distance = 10.0;  // px at level 0, times the level's scale
+  bool check_orientation = true;
+};
+
+// Pairs (i1, i2) of features not yet matched (matched1/2 true = skip; empty =
+// none matched) for triangulating new points. Brute force over all pairs,
+// vocabulary-free: a candidate must lie near the epipolar line of i1 (3.84
+// sigma^2 at its level) and not near the epipole of view 2 (where depth is
+// ill-conditioned); the best must pass max_distance and the ratio test against
+// the second-best candidate; frame-2 features claimed twice keep the closer;
+// then the rotation check. level_sigma2: OrbExtractor::levelSigma2().
+std::vector<std::pair<int, int>> searchForTriangulation(const FeatureView& view1, const FeatureView& view2,
+                                                        const cv::Matx33d& F21, const std::vector<double>& level_sigma2,
+                                                        const std::vector<bool>& matched1 = {},
+                                                        const std::vector<bool>& matched2 = {},
+                                                        const TriangulationSearchParams& params = {});
+
+}  // namespace vslam

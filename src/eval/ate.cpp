@@ -51,7 +51,8 @@ AteResult computeAte(const std::vector<StampedPose>& estimate, const std::vector
   // Least-squares similarity (or rigid) transform taking estimate onto ground truth.
   const Mat4 T = Eigen::umeyama(estimate_xyz, groundtruth_xyz, options.alignment == Alignment::Sim3);
   const Mat3 sR = T.topLeftCorner<3, 3>();
-  result.scale = std::cbrt(sR.determinant());
+  // umeyama returns s*R in one block; det(s*R) = s^3 (exactly 1 for SE(3), so say so exactly).
+  result.scale = options.alignment == Alignment::Sim3 ? std::cbrt(sR.determinant()) : 1.0;
   result.alignment = Sim3(result.scale, sR / result.scale, T.topRightCorner<3, 1>());
 
   result.errors_m.resize(result.pairs);

@@ -138,8 +138,9 @@ TEST(Sequence, CalibrationP0OverridesTheConfig) {
   const fs::path data = test::scratchDir("kitti_calib");
   const fs::path root = data / "kitti" / "sequences" / "01";
   fs::create_directories(root / "image_0");
-  cv::imwrite((root / "image_0" / "000000.png").string(), cv::Mat(376, 1241, CV_8UC1, cv::Scalar(0)));
-  cv::imwrite((root / "image_0" / "000001.png").string(), cv::Mat(376, 1241, CV_8UC1, cv::Scalar(0)));
+  // Images of another size than config/kitti_00-02.yaml's 1241x376: the sequence's files win.
+  cv::imwrite((root / "image_0" / "000000.png").string(), cv::Mat(370, 1226, CV_8UC1, cv::Scalar(0)));
+  cv::imwrite((root / "image_0" / "000001.png").string(), cv::Mat(370, 1226, CV_8UC1, cv::Scalar(0)));
   writeText(root / "times.txt", "0.0\n0.1\n");
   writeText(root / "calib.txt", "P0: 700 0 600 0 0 701 180 0 0 0 1 0\n");
   SequenceOptions options;
@@ -150,8 +151,10 @@ TEST(Sequence, CalibrationP0OverridesTheConfig) {
   EXPECT_DOUBLE_EQ(seq.config.camera.fy, 701);
   EXPECT_DOUBLE_EQ(seq.config.camera.cx, 600);
   EXPECT_DOUBLE_EQ(seq.config.camera.cy, 180);
+  EXPECT_EQ(seq.config.camera.width, 1226);
+  EXPECT_EQ(seq.config.camera.height, 370);
   EXPECT_FALSE(seq.hasGroundTruth());  // no poses/01.txt: runs without ground truth
-  EXPECT_EQ(seq.loadGray(1).cols, 1241);
+  EXPECT_EQ(seq.loadGray(1).cols, 1226);
 }
 
 TEST(Sequence, FolderTakesTheCameraFromItsName) {

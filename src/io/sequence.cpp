@@ -261,9 +261,9 @@ Located locateKitti(const std::string& spec, const SequenceOptions& options) {
 
 Located locateFolder(const std::string& spec) {
   const fs::path folder = spec;
-  const std::string folder_name = fs::absolute(folder).lexically_normal().filename().string().empty()
-                                      ? fs::absolute(folder).lexically_normal().parent_path().filename().string()
-                                      : fs::absolute(folder).lexically_normal().filename().string();
+  fs::path normalized = fs::absolute(folder).lexically_normal();
+  if (normalized.filename().empty()) normalized = normalized.parent_path();  // "dir/" -> "dir"
+  const std::string folder_name = normalized.filename().string();
   static const std::regex kTumName(R"(rgbd_dataset_freiburg([123])_.+)");
   static const std::regex kKittiName(R"(\d{2})");
   std::smatch match;
@@ -276,8 +276,7 @@ Located locateFolder(const std::string& spec) {
     // Standard odometry layout: <root>/sequences/NN beside <root>/poses/NN.txt.
     if (std::regex_match(folder_name, kKittiName)) {
       located.camera = kittiCameraFor(std::stoi(folder_name));
-      located.kitti_poses = fs::absolute(folder).lexically_normal().parent_path().parent_path() / "poses" /
-                            (folder_name + ".txt");
+      located.kitti_poses = normalized.parent_path().parent_path() / "poses" / (folder_name + ".txt");
     }
     return located;
   }
@@ -333,6 +332,11 @@ Sequence openSequence(const std::string& spec, const SequenceOptions& options) {
     readTumFolder(sequence);
   else
     readKittiFolder(sequence, located.kitti_poses);
+
+  // A KITTI sequence's own files define its camera: calib.txt the intrinsics
+  // (read above), the images their size (sequences 13-21 have no camera file of their own).
+  if (located.kind == SequenceKind::Kitti && options.config_path.empty())
+    sequence.config.camera.width = sequence.config.camera.height = 0;
 
   // ORB-SLAM2 settings files carry no image size: take it from the first image.
   PinholeCamera& camera = sequence.config.camera;

@@ -107,6 +107,16 @@ TEST(CliRun, NotFoundWithoutFetchingExitsTwoWithOneLine) {
   EXPECT_EQ(run.out, "");
 }
 
+TEST(CliRun, BadConfigExitsTwoNamingTheKey) {
+  const fs::path config = test::scratchDir("cli_bad_config") / "cam.yaml";
+  std::ofstream(config) << "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: five hundred\n  cx: 320\n  cy: 240\n";
+  const Outcome run = vslam("run --seq tum/fr1_xyz --config " + quoted(config.string()));
+  EXPECT_EQ(run.exit_code, 2);
+  const auto lines = errorLines(run.err);
+  ASSERT_EQ(lines.size(), 1u) << run.err;
+  EXPECT_EQ(lines[0], "error: " + config.string() + ":5: key 'camera.fy' has the wrong type (expected a number)");
+}
+
 TEST(CliRun, FetchFailsFastWithoutNetworkAndSaysWhereToPutTheData) {
   const fs::path empty = test::scratchDir("cli_fetch_offline");
   const auto start = std::chrono::steady_clock::now();

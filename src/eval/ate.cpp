@@ -48,6 +48,12 @@ AteResult computeAte(const std::vector<StampedPose>& estimate, const std::vector
     estimate_xyz.col(k) = estimate[result.pairs_idx[k].first].T_wc.t;
     groundtruth_xyz.col(k) = groundtruth[result.pairs_idx[k].second].T_wc.t;
   }
+  // A trajectory that never moves (e.g. a run lost from the start) has no
+  // defined alignment; say so instead of reporting NaN.
+  const double estimate_spread = (estimate_xyz.colwise() - estimate_xyz.rowwise().mean()).squaredNorm();
+  if (!(estimate_spread > 1e-18 * result.pairs))
+    throw InputError("the " + std::to_string(result.pairs) +
+                     " paired estimated positions are all the same point; no alignment is defined");
   // Least-squares similarity (or rigid) transform taking estimate onto ground truth.
   const Mat4 T = Eigen::umeyama(estimate_xyz, groundtruth_xyz, options.alignment == Alignment::Sim3);
   const Mat3 sR = T.topLeftCorner<3, 3>();

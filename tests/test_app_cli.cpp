@@ -39,9 +39,9 @@ std::string slurp(const fs::path& path) {
 Outcome vslam(const std::string& args, const std::string& env = "") {
   // One folder per test and call: ctest may run tests of this file in parallel.
   static int call = 0;
-  const fs::path dir = test::scratchDir(std::string("cli_io_") +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
-                                        std::to_string(++call));
+  const fs::path dir =
+      test::scratchDir(std::string("cli_io_") + ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
+                       std::to_string(++call));
   const std::string command = "cd " + quoted(test::sourceDir().string()) + " && env -u VSLAM_DATA " + env + " " +
                               quoted(std::string(VSLAM_BINARY_DIR) + "/vslam") + " " + args + " > " +
                               quoted((dir / "out").string()) + " 2> " + quoted((dir / "err").string());
@@ -109,7 +109,8 @@ TEST(CliRun, NotFoundWithoutFetchingExitsTwoWithOneLine) {
 
 TEST(CliRun, BadConfigExitsTwoNamingTheKey) {
   const fs::path config = test::scratchDir("cli_bad_config") / "cam.yaml";
-  std::ofstream(config) << "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: five hundred\n  cx: 320\n  cy: 240\n";
+  std::ofstream(config)
+      << "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: five hundred\n  cx: 320\n  cy: 240\n";
   const Outcome run = vslam("run --seq tum/fr1_xyz --config " + quoted(config.string()));
   EXPECT_EQ(run.exit_code, 2);
   const auto lines = errorLines(run.err);
@@ -121,8 +122,8 @@ TEST(CliRun, FetchFailsFastWithoutNetworkAndSaysWhereToPutTheData) {
   const fs::path empty = test::scratchDir("cli_fetch_offline");
   const auto start = std::chrono::steady_clock::now();
   // Port 9 on the loopback refuses at once: the same path as a machine without internet.
-  const Outcome run = vslam("run --seq tum/fr2_desk --data-root " + quoted(empty.string()),
-                            "VSLAM_TUM_BASE_URL=http://127.0.0.1:9");
+  const Outcome run =
+      vslam("run --seq tum/fr2_desk --data-root " + quoted(empty.string()), "VSLAM_TUM_BASE_URL=http://127.0.0.1:9");
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(20));
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_TRUE(contains(run.err, "download of http://127.0.0.1:9/freiburg2/rgbd_dataset_freiburg2_desk.tgz failed"))
@@ -187,8 +188,8 @@ TEST(CliEval, WritesJsonWithTheFiguresOfComputeAte) {
   writeTumTrajectory(est, estimate);
   const std::string json_path = (dir / "ate.json").string();
 
-  const Outcome eval = vslam("eval --est " + quoted(est) + " --gt " + quoted(gt) + " --align sim3 --json " +
-                             quoted(json_path));
+  const Outcome eval =
+      vslam("eval --est " + quoted(est) + " --gt " + quoted(gt) + " --align sim3 --json " + quoted(json_path));
   ASSERT_EQ(eval.exit_code, 0) << eval.err;
   EXPECT_TRUE(contains(eval.out, "ATE (sim3 alignment, 3000 pairs of 3000 estimated poses): rmse 0.000000 m"))
       << eval.out;
@@ -240,14 +241,15 @@ TEST(CliEval, MalformedFileExitsTwoWithOneLine) {
   std::ofstream(est) << "1.0 0 0 0 0 0 0 1\n1.1 0 0 0 0 0 0 1\n1.2 0 0 0 0 0 0 1\n";
   const Outcome apart = vslam("eval --est " + quoted(est) + " --gt " + quoted(gt));
   EXPECT_EQ(apart.exit_code, 2);
-  EXPECT_TRUE(contains(apart.err, "error: " + est + ": only 0 of 3 estimated poses pair with ground truth")) << apart.err;
+  EXPECT_TRUE(contains(apart.err, "error: " + est + ": only 0 of 3 estimated poses pair with ground truth"))
+      << apart.err;
 }
 
 TEST(CliEval, HelpListsEveryOptionAndItsDefault) {
   const Outcome help = vslam("eval --help");
   EXPECT_EQ(help.exit_code, 0);
-  for (const char* option : {"--est", "--gt", "--align", "=se3", "--format", "=tum", "--json", "--max-dt", "=0.02",
-                             "--rpe-delta"})
+  for (const char* option :
+       {"--est", "--gt", "--align", "=se3", "--format", "=tum", "--json", "--max-dt", "=0.02", "--rpe-delta"})
     EXPECT_TRUE(contains(help.out, option)) << option << "\n" << help.out;
 }
 

@@ -12,8 +12,8 @@
 namespace vslam {
 
 std::vector<std::pair<int, int>> associatePoses(const std::vector<StampedPose>& estimate,
-                                                const std::vector<StampedPose>& groundtruth,
-                                                Association association, double max_time_diff) {
+                                                const std::vector<StampedPose>& groundtruth, Association association,
+                                                double max_time_diff) {
   std::vector<std::pair<int, int>> pairs;
   if (association == Association::Index) {
     const int n = static_cast<int>(std::min(estimate.size(), groundtruth.size()));
@@ -84,9 +84,8 @@ AteResult computeAte(const std::vector<StampedPose>& estimate, const std::vector
 }
 
 nlohmann::json toJson(const AteResult& result) {
-  return {{"rmse_m", result.rmse_m}, {"mean_m", result.mean_m}, {"median_m", result.median_m},
-          {"std_m", result.std_m},   {"min_m", result.min_m},   {"max_m", result.max_m},
-          {"scale", result.scale},   {"pairs", result.pairs}};
+  return {{"rmse_m", result.rmse_m}, {"mean_m", result.mean_m}, {"median_m", result.median_m}, {"std_m", result.std_m},
+          {"min_m", result.min_m},   {"max_m", result.max_m},   {"scale", result.scale},       {"pairs", result.pairs}};
 }
 
 const char* toString(Alignment alignment) { return alignment == Alignment::Sim3 ? "sim3" : "se3"; }

@@ -8,9 +8,9 @@
 #include <regex>
 #include <stdexcept>
 
+#include <spdlog/spdlog.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <spdlog/spdlog.h>
 
 #include "vslam/io/sequence_catalog.hpp"
 #include "vslam/io/text_table.hpp"
@@ -143,9 +143,9 @@ void readKittiFolder(Sequence& sequence, const fs::path& poses_path) {
                        "expected one timestamp, found " + std::to_string(row.fields.size()) + " fields");
     const double t = parseNumber(row.fields[0], times_file, row.line, "timestamp");
     if (!times.empty() && t <= times.back())
-      throw InputError(times_file, row.line,
-                       "timestamp " + timestampText(t) + " goes backwards (previous line has " +
-                           timestampText(times.back()) + ")");
+      throw InputError(
+          times_file, row.line,
+          "timestamp " + timestampText(t) + " goes backwards (previous line has " + timestampText(times.back()) + ")");
     times.push_back(t);
   }
   if (times.empty()) throw InputError(times_file, 0, "lists no timestamps");
@@ -225,15 +225,18 @@ Located locateTum(const std::string& spec, const SequenceOptions& options) {
                          listOfTumNames() + " (tools/fetch_dataset.sh --list prints all)");
   std::vector<std::string> looked;
   for (const std::string& root : dataSearchRoots(options)) {
-    for (const fs::path& candidate : {fs::path(root) / "tum" / info->archive_name, fs::path(root) / info->archive_name}) {
+    for (const fs::path& candidate :
+         {fs::path(root) / "tum" / info->archive_name, fs::path(root) / info->archive_name}) {
       looked.push_back(candidate.string());
       if (fs::is_directory(candidate)) return {candidate, SequenceKind::Tum, info->camera, {}};
     }
   }
   throw SequenceNotFound(spec, 0,
-                         "sequence not found; looked in " + joined(looked, ", ") + ". Fetch it with "
-                         "'tools/fetch_dataset.sh tum/" + info->short_name + "' (needs internet), or download " +
-                             tumArchiveUrl(*info) + " by hand and unpack it into " + fetchDataRoot(options) + "/tum/");
+                         "sequence not found; looked in " + joined(looked, ", ") +
+                             ". Fetch it with "
+                             "'tools/fetch_dataset.sh tum/" +
+                             info->short_name + "' (needs internet), or download " + tumArchiveUrl(*info) +
+                             " by hand and unpack it into " + fetchDataRoot(options) + "/tum/");
 }
 
 Located locateKitti(const std::string& spec, const SequenceOptions& options) {
@@ -255,8 +258,9 @@ Located locateKitti(const std::string& spec, const SequenceOptions& options) {
   throw SequenceNotFound(spec, 0,
                          "sequence not found; looked in " + joined(looked, ", ") +
                              ". KITTI odometry needs registration at cvlibs.net: download the grey images and "
-                             "poses and unpack them so that " + fetchDataRoot(options) + "/kitti/sequences/" + nn +
-                             "/image_0/ and " + fetchDataRoot(options) + "/kitti/poses/" + nn + ".txt exist");
+                             "poses and unpack them so that " +
+                             fetchDataRoot(options) + "/kitti/sequences/" + nn + "/image_0/ and " +
+                             fetchDataRoot(options) + "/kitti/poses/" + nn + ".txt exist");
 }
 
 Located locateFolder(const std::string& spec) {
@@ -320,7 +324,8 @@ Sequence openSequence(const std::string& spec, const SequenceOptions& options) {
   } else if (fs::exists(spec)) {
     throw InputError(spec, 0, "is a file, not a sequence folder");
   } else {
-    throw InputError(spec, 0, "no such folder, and not a sequence name (tum/<name> such as tum/fr1_xyz, or kitti/<NN>)");
+    throw InputError(spec, 0,
+                     "no such folder, and not a sequence name (tum/<name> such as tum/fr1_xyz, or kitti/<NN>)");
   }
 
   Sequence sequence;
@@ -390,9 +395,9 @@ cv::Mat Sequence::loadGray(size_t i) const {
 cv::Mat Sequence::loadDepthMeters(size_t i) const {
   const FrameEntry& frame = frames.at(i);
   if (frame.depth_path.empty())
-    throw InputError((fs::path(root) / "depth.txt").string(), 0,
-                     "no depth image within 0.02 s of colour frame " + std::to_string(i) + " (" + frame.image_path +
-                         ")");
+    throw InputError(
+        (fs::path(root) / "depth.txt").string(), 0,
+        "no depth image within 0.02 s of colour frame " + std::to_string(i) + " (" + frame.image_path + ")");
   const cv::Mat raw = readImage(frame.depth_path, cv::IMREAD_UNCHANGED, 0, "depth.txt");
   if (raw.type() != CV_16UC1) throw InputError(frame.depth_path, 0, "depth image is not a single-channel 16-bit PNG");
   if (config.camera.depth_factor <= 0)

@@ -231,12 +231,10 @@ Located locateTum(const std::string& spec, const SequenceOptions& options) {
       if (fs::is_directory(candidate)) return {candidate, SequenceKind::Tum, info->camera, {}};
     }
   }
-  throw SequenceNotFound(spec, 0,
-                         "sequence not found; looked in " + joined(looked, ", ") +
-                             ". Fetch it with "
-                             "'tools/fetch_dataset.sh tum/" +
-                             info->short_name + "' (needs internet), or download " + tumArchiveUrl(*info) +
-                             " by hand and unpack it into " + fetchDataRoot(options) + "/tum/");
+  const std::string how_to_get = "Fetch it with 'tools/fetch_dataset.sh tum/" + info->short_name +
+                                 "' (needs internet), or download " + tumArchiveUrl(*info) +
+                                 " by hand and unpack it into " + fetchDataRoot(options) + "/tum/";
+  throw SequenceNotFound(spec, 0, "sequence not found; looked in " + joined(looked, ", ") + ". " + how_to_get);
 }
 
 Located locateKitti(const std::string& spec, const SequenceOptions& options) {

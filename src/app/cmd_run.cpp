@@ -108,7 +108,9 @@ int run(RunOptions options) {
   std::cout << "deterministic: " << (options.deterministic ? "yes" : "no") << "\n";
 
   if (!options.out_dir.empty()) {
-    std::filesystem::create_directories(options.out_dir);
+    std::error_code error;
+    std::filesystem::create_directories(options.out_dir, error);
+    if (error) throw InputError(options.out_dir, 0, "cannot create the output folder: " + error.message());
     const std::string path = options.out_dir + "/sequence.json";
     nlohmann::json info = {{"sequence", sequence.name},
                            {"root", sequence.root},

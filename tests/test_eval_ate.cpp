@@ -154,6 +154,20 @@ TEST(Ate, TooFewPairsIsAnError) {
   }
 }
 
+TEST(Ate, MotionlessEstimateIsAnErrorNotNaN) {
+  const std::vector<StampedPose> groundtruth = helix(10);
+  std::vector<StampedPose> estimate = helix(10);
+  for (StampedPose& pose : estimate) pose.T_wc.t = Vec3(1, 2, 3);
+  AteOptions options;
+  options.alignment = Alignment::Sim3;
+  try {
+    computeAte(estimate, groundtruth, options);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("all the same point"), std::string::npos) << e.what();
+  }
+}
+
 // The perturbed copy of tools/make_perturbed_trajectory.py, computed here with the same formula.
 std::vector<StampedPose> perturbedFr1Xyz(const std::vector<StampedPose>& groundtruth) {
   const Mat3 R = Eigen::AngleAxisd(30.0 * M_PI / 180.0, Vec3(1, 2, 3).normalized()).toRotationMatrix();

@@ -52,8 +52,8 @@ TEST(Rpe, RotationDriftPerSecond) {
   for (int i = 0; i <= 50; ++i) {
     const double t = 0.1 * i;
     groundtruth.push_back(at(t, Vec3(1, 2, 3), Eigen::AngleAxisd(0.1 * t, Vec3::UnitZ()).toRotationMatrix()));
-    estimate.push_back(at(t, Vec3(1, 2, 3),
-                          Eigen::AngleAxisd(0.1 * t + 2.0 * t * M_PI / 180.0, Vec3::UnitZ()).toRotationMatrix()));
+    estimate.push_back(
+        at(t, Vec3(1, 2, 3), Eigen::AngleAxisd(0.1 * t + 2.0 * t * M_PI / 180.0, Vec3::UnitZ()).toRotationMatrix()));
   }
   const RpeResult rpe = computeRpe(estimate, groundtruth, RpeOptions());
   EXPECT_EQ(rpe.pairs, 41);

@@ -135,22 +135,26 @@ TEST(Sequence, KittiOdometry00) {
 
 TEST(Sequence, CalibrationP0OverridesTheConfig) {
   // A KITTI folder whose calib.txt differs from config/kitti_00-02.yaml.
-  const fs::path root = test::scratchDir("kitti_calib") / "kitti" / "sequences" / "01";
+  const fs::path data = test::scratchDir("kitti_calib");
+  const fs::path root = data / "kitti" / "sequences" / "01";
   fs::create_directories(root / "image_0");
-  cv::imwrite((root / "image_0" / "000000.png").string(), cv::Mat(376, 1241, CV_8UC1, cv::Scalar(0)));
-  cv::imwrite((root / "image_0" / "000001.png").string(), cv::Mat(376, 1241, CV_8UC1, cv::Scalar(0)));
+  // Images of another size than config/kitti_00-02.yaml's 1241x376: the sequence's files win.
+  cv::imwrite((root / "image_0" / "000000.png").string(), cv::Mat(370, 1226, CV_8UC1, cv::Scalar(0)));
+  cv::imwrite((root / "image_0" / "000001.png").string(), cv::Mat(370, 1226, CV_8UC1, cv::Scalar(0)));
   writeText(root / "times.txt", "0.0\n0.1\n");
   writeText(root / "calib.txt", "P0: 700 0 600 0 0 701 180 0 0 0 1 0\n");
   SequenceOptions options;
-  options.data_root = (test::scratchDir("kitti_calib_unused").parent_path() / "kitti_calib").string();
+  options.data_root = data.string();
   const Sequence seq = openSequence("kitti/1", options);
   EXPECT_EQ(seq.frames.size(), 2u);
   EXPECT_DOUBLE_EQ(seq.config.camera.fx, 700);
   EXPECT_DOUBLE_EQ(seq.config.camera.fy, 701);
   EXPECT_DOUBLE_EQ(seq.config.camera.cx, 600);
   EXPECT_DOUBLE_EQ(seq.config.camera.cy, 180);
+  EXPECT_EQ(seq.config.camera.width, 1226);
+  EXPECT_EQ(seq.config.camera.height, 370);
   EXPECT_FALSE(seq.hasGroundTruth());  // no poses/01.txt: runs without ground truth
-  EXPECT_EQ(seq.loadGray(1).cols, 1241);
+  EXPECT_EQ(seq.loadGray(1).cols, 1226);
 }
 
 TEST(Sequence, FolderTakesTheCameraFromItsName) {

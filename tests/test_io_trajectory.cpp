@@ -101,8 +101,7 @@ TEST(TrajectoryIoErrors, MalformedTumLines) {
   path = writeText("traj_bad_tum", "b.txt", "1.0 0 0 0 0 0 0 1\n2.0 0 zero 0 0 0 0 1\n");
   EXPECT_EQ(errorOf([&] { readTumTrajectory(path); }), path + ":2: ty 'zero' is not a number");
   path = writeText("traj_bad_tum", "c.txt", "1.0 0 0 0 0 0 0 0\n");
-  EXPECT_EQ(errorOf([&] { readTumTrajectory(path); }),
-            path + ":1: quaternion (qx qy qz qw) has norm 0.000000, not 1");
+  EXPECT_EQ(errorOf([&] { readTumTrajectory(path); }), path + ":1: quaternion (qx qy qz qw) has norm 0.000000, not 1");
   path = writeText("traj_bad_tum", "d.txt", "1.0 0 0 0 0 0 0 1\n0.9 0 0 0 0 0 0 1\n");
   EXPECT_EQ(errorOf([&] { readTumTrajectory(path); }),
             path + ":2: timestamp 0.900000 does not increase (previous line has 1.000000)");
@@ -120,7 +119,9 @@ TEST(TrajectoryIoErrors, MalformedKittiLines) {
   path = writeText("traj_bad_kitti", "c.txt", "2 0 0 0 0 1 0 0 0 0 1 0\n");
   EXPECT_EQ(errorOf([&] { readKittiTrajectory(path); }), path + ":1: the 3x3 part is not a rotation matrix");
   path = writeText("traj_bad_kitti", "d.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n");
-  EXPECT_EQ(errorOf([&] { readKittiTrajectory(path, {0.0, 0.1}); }),
+  EXPECT_EQ(errorOf([&] {
+              readKittiTrajectory(path, {0.0, 0.1});
+            }),
             path + ": has 1 poses but there are 2 timestamps (one pose per frame expected)");
 }
 

@@ -65,12 +65,16 @@ if [ -f "$dest/$archive/rgb.txt" ]; then
   echo "fetch_dataset.sh: $dest/$archive already holds the sequence" >&2
   exit 0
 fi
+[ ! -e "$dest/$archive" ] || die "$dest/$archive exists but has no rgb.txt; remove it (or complete it) first"
+
 created_root=0; [ -d "$data_root" ] || created_root=1
 mkdir -p "$dest" || die "cannot create $dest"
 part="$dest/$archive.tgz.part"
-# Leave no partial download, nor folders this run created for nothing.
+staging="$dest/.$archive.unpacking"
+# Leave no partial download or unpacking, nor folders this run created for nothing.
 cleanup() {
   rm -f "$part"
+  rm -rf "$staging"
   rmdir "$dest" 2>/dev/null || true
   [ "$created_root" = 0 ] || rmdir "$data_root" 2>/dev/null || true
 }
@@ -89,6 +93,10 @@ tar -tzf "$part" | grep -qx "$archive/rgb.txt" ||
   die "$spec: the archive from $url has no $archive/rgb.txt; $by_hand"
 
 echo "fetch_dataset.sh: unpacking into $dest" >&2
-tar -xzf "$part" -C "$dest" || die "$spec: unpacking into $dest failed (disk full?)"
+# Unpack beside the target and move it in whole, so an interrupted run never
+# leaves a folder that looks complete.
+mkdir -p "$staging"
+tar -xzf "$part" -C "$staging" || die "$spec: unpacking into $dest failed (disk full?)"
+mv "$staging/$archive" "$dest/$archive" || die "$spec: cannot move the unpacked sequence to $dest/$archive"
 rm -f "$part"
 echo "fetch_dataset.sh: $spec is in $dest/$archive" >&2

@@ -16,7 +16,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 
-packages=(build-essential cmake pkg-config
+packages=(build-essential cmake pkg-config curl
           libopencv-dev libeigen3-dev libceres-dev libyaml-cpp-dev libcli11-dev
           libspdlog-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev libosmesa6-dev
           jq curl ca-certificates)

@@ -5,8 +5,8 @@
 #include <memory>
 #include <string>
 
-#include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
+#include <nlohmann/json.hpp>
 
 #include "commands.hpp"
 #include "vslam/core/error.hpp"
@@ -44,9 +44,8 @@ int run(const EvalOptions& options) {
   const std::vector<StampedPose> estimate = readTrajectory(options.estimate_path, options.format);
   const std::vector<StampedPose> groundtruth = readTrajectory(options.groundtruth_path, options.format);
   if (kitti && estimate.size() != groundtruth.size())
-    spdlog::warn("{} has {} poses and {} has {}; pairing the first {} by index", options.estimate_path,
-                 estimate.size(), options.groundtruth_path, groundtruth.size(),
-                 std::min(estimate.size(), groundtruth.size()));
+    spdlog::warn("{} has {} poses and {} has {}; pairing the first {} by index", options.estimate_path, estimate.size(),
+                 options.groundtruth_path, groundtruth.size(), std::min(estimate.size(), groundtruth.size()));
 
   AteOptions ate_options;
   ate_options.alignment = options.align == "sim3" ? Alignment::Sim3 : Alignment::SE3;
@@ -56,7 +55,8 @@ int run(const EvalOptions& options) {
   try {
     ate = computeAte(estimate, groundtruth, ate_options);
   } catch (const InputError& e) {
-    throw InputError(options.estimate_path, 0, std::string(e.what()) + " (ground truth: " + options.groundtruth_path + ")");
+    throw InputError(options.estimate_path, 0,
+                     std::string(e.what()) + " (ground truth: " + options.groundtruth_path + ")");
   }
 
   RpeOptions rpe_options;
@@ -74,8 +74,8 @@ int run(const EvalOptions& options) {
   if (rpe.pairs > 0)
     std::cout << "RPE (interval " << delta_text << ", " << rpe.pairs << " pairs): translation rmse "
               << number(rpe.trans_rmse) << " " << rpe.trans_units << ", mean " << number(rpe.trans_mean) << " "
-              << rpe.trans_units << "; rotation rmse " << number(rpe.rot_rmse_deg) << " " << rpe.rot_units
-              << ", mean " << number(rpe.rot_mean_deg) << " " << rpe.rot_units << "\n";
+              << rpe.trans_units << "; rotation rmse " << number(rpe.rot_rmse_deg) << " " << rpe.rot_units << ", mean "
+              << number(rpe.rot_mean_deg) << " " << rpe.rot_units << "\n";
   else
     std::cout << "RPE (interval " << delta_text << "): no pose pairs that far apart\n";
 

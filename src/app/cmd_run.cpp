@@ -9,8 +9,8 @@
 #include <iostream>
 #include <string>
 
-#include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
+#include <nlohmann/json.hpp>
 
 #include "commands.hpp"
 #include "vslam/core/error.hpp"
@@ -74,8 +74,8 @@ int run(RunOptions options) {
     if (sequence.framesWithDepth() == 0)
       throw InputError(sequence.root + "/depth.txt", 0, "no depth images paired (--mode rgbd needs depth.txt)");
     if (!sequence.hasDepth())
-      spdlog::warn("--mode rgbd: {} of {} frames have no depth image", sequence.frames.size() - sequence.framesWithDepth(),
-                   sequence.frames.size());
+      spdlog::warn("--mode rgbd: {} of {} frames have no depth image",
+                   sequence.frames.size() - sequence.framesWithDepth(), sequence.frames.size());
   }
 
   const PinholeCamera& c = sequence.config.camera;
@@ -83,14 +83,15 @@ int run(RunOptions options) {
   std::cout << "root: " << sequence.root << "\n";
   std::cout << "kind: " << (sequence.kind == SequenceKind::Tum ? "tum" : "kitti") << "\n";
   std::cout << "frames: " << sequence.frames.size();
-  if (sequence.frames.size() != total_frames) std::cout << " (first " << sequence.frames.size() << " of " << total_frames << ")";
+  if (sequence.frames.size() != total_frames)
+    std::cout << " (first " << sequence.frames.size() << " of " << total_frames << ")";
   std::cout << "\n";
   const double first_t = sequence.frames.front().timestamp, last_t = sequence.frames.back().timestamp;
   std::cout << "time span: " << fixed(first_t, 6) << " .. " << fixed(last_t, 6) << " s (" << fixed(last_t - first_t, 3)
             << " s)\n";
-  std::cout << std::setprecision(10) << "camera: " << c.name << " " << c.width << "x" << c.height << " fx " << c.fx << " fy " << c.fy << " cx "
-            << c.cx << " cy " << c.cy << " k1 " << c.k1 << " k2 " << c.k2 << " p1 " << c.p1 << " p2 " << c.p2 << " k3 "
-            << c.k3 << " fps " << c.fps;
+  std::cout << std::setprecision(10) << "camera: " << c.name << " " << c.width << "x" << c.height << " fx " << c.fx
+            << " fy " << c.fy << " cx " << c.cx << " cy " << c.cy << " k1 " << c.k1 << " k2 " << c.k2 << " p1 " << c.p1
+            << " p2 " << c.p2 << " k3 " << c.k3 << " fps " << c.fps;
   if (c.baseline_m > 0) std::cout << " baseline " << c.baseline_m << " m";
   std::cout << " (" << sequence.config.source << ")\n";
   std::cout << "depth: " << sequence.framesWithDepth() << " of " << sequence.frames.size() << " frames paired\n";
@@ -107,7 +108,9 @@ int run(RunOptions options) {
   std::cout << "deterministic: " << (options.deterministic ? "yes" : "no") << "\n";
 
   if (!options.out_dir.empty()) {
-    std::filesystem::create_directories(options.out_dir);
+    std::error_code error;
+    std::filesystem::create_directories(options.out_dir, error);
+    if (error) throw InputError(options.out_dir, 0, "cannot create the output folder: " + error.message());
     const std::string path = options.out_dir + "/sequence.json";
     nlohmann::json info = {{"sequence", sequence.name},
                            {"root", sequence.root},

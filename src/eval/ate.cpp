@@ -12,8 +12,8 @@
 namespace vslam {
 
 std::vector<std::pair<int, int>> associatePoses(const std::vector<StampedPose>& estimate,
-                                                const std::vector<StampedPose>& groundtruth,
-                                                Association association, double max_time_diff) {
+                                                const std::vector<StampedPose>& groundtruth, Association association,
+                                                double max_time_diff) {
   std::vector<std::pair<int, int>> pairs;
   if (association == Association::Index) {
     const int n = static_cast<int>(std::min(estimate.size(), groundtruth.size()));
@@ -48,10 +48,17 @@ AteResult computeAte(const std::vector<StampedPose>& estimate, const std::vector
     estimate_xyz.col(k) = estimate[result.pairs_idx[k].first].T_wc.t;
     groundtruth_xyz.col(k) = groundtruth[result.pairs_idx[k].second].T_wc.t;
   }
+  // A trajectory that never moves (e.g. a run lost from the start) has no
+  // defined alignment; say so instead of reporting NaN.
+  const double estimate_spread = (estimate_xyz.colwise() - estimate_xyz.rowwise().mean()).squaredNorm();
+  if (!(estimate_spread > 1e-18 * result.pairs))
+    throw InputError("the " + std::to_string(result.pairs) +
+                     " paired estimated positions are all the same point; no alignment is defined");
   // Least-squares similarity (or rigid) transform taking estimate onto ground truth.
   const Mat4 T = Eigen::umeyama(estimate_xyz, groundtruth_xyz, options.alignment == Alignment::Sim3);
   const Mat3 sR = T.topLeftCorner<3, 3>();
-  result.scale = std::cbrt(sR.determinant());
+  // umeyama returns s*R in one block; det(s*R) = s^3 (exactly 1 for SE(3), so say so exactly).
+  result.scale = options.alignment == Alignment::Sim3 ? std::cbrt(sR.determinant()) : 1.0;
   result.alignment = Sim3(result.scale, sR / result.scale, T.topRightCorner<3, 1>());
 
   result.errors_m.resize(result.pairs);
@@ -77,9 +84,8 @@ AteResult computeAte(const std::vector<StampedPose>& estimate, const std::vector
 }
 
 nlohmann::json toJson(const AteResult& result) {
-  return {{"rmse_m", result.rmse_m}, {"mean_m", result.mean_m}, {"median_m", result.median_m},
-          {"std_m", result.std_m},   {"min_m", result.min_m},   {"max_m", result.max_m},
-          {"scale", result.scale},   {"pairs", result.pairs}};
+  return {{"rmse_m", result.rmse_m}, {"mean_m", result.mean_m}, {"median_m", result.median_m}, {"std_m", result.std_m},
+          {"min_m", result.min_m},   {"max_m", result.max_m},   {"scale", result.scale},       {"pairs", result.pairs}};
 }
 
 const char* toString(Alignment alignment) { return alignment == Alignment::Sim3 ? "sim3" : "se3"; }

@@ -35,8 +35,7 @@ RpeResult computeRpe(const std::vector<StampedPose>& estimate, const std::vector
     if (by_time)
       along[k] = estimate[pairs[k].first].timestamp;
     else if (k > 0)
-      along[k] = along[k - 1] +
-                 (groundtruth[pairs[k].second].T_wc.t - groundtruth[pairs[k - 1].second].T_wc.t).norm();
+      along[k] = along[k - 1] + (groundtruth[pairs[k].second].T_wc.t - groundtruth[pairs[k - 1].second].T_wc.t).norm();
   }
 
   double trans_sum = 0, trans_squares = 0, rot_sum = 0, rot_squares = 0;
@@ -74,10 +73,10 @@ RpeResult computeRpe(const std::vector<StampedPose>& estimate, const std::vector
 }
 
 nlohmann::json toJson(const RpeResult& result) {
-  return {{"trans_rmse", result.trans_rmse},     {"trans_mean", result.trans_mean},
-          {"rot_rmse_deg", result.rot_rmse_deg}, {"rot_mean_deg", result.rot_mean_deg},
-          {"pairs", result.pairs},               {"trans_units", result.trans_units},
-          {"rot_units", result.rot_units}};
+  return {
+      {"trans_rmse", result.trans_rmse},     {"trans_mean", result.trans_mean}, {"rot_rmse_deg", result.rot_rmse_deg},
+      {"rot_mean_deg", result.rot_mean_deg}, {"pairs", result.pairs},           {"trans_units", result.trans_units},
+      {"rot_units", result.rot_units}};
 }
 
 }  // namespace vslam

@@ -8,9 +8,9 @@
 #include <regex>
 #include <stdexcept>
 
+#include <spdlog/spdlog.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <spdlog/spdlog.h>
 
 #include "vslam/io/sequence_catalog.hpp"
 #include "vslam/io/text_table.hpp"
@@ -143,9 +143,9 @@ void readKittiFolder(Sequence& sequence, const fs::path& poses_path) {
                        "expected one timestamp, found " + std::to_string(row.fields.size()) + " fields");
     const double t = parseNumber(row.fields[0], times_file, row.line, "timestamp");
     if (!times.empty() && t <= times.back())
-      throw InputError(times_file, row.line,
-                       "timestamp " + timestampText(t) + " goes backwards (previous line has " +
-                           timestampText(times.back()) + ")");
+      throw InputError(
+          times_file, row.line,
+          "timestamp " + timestampText(t) + " goes backwards (previous line has " + timestampText(times.back()) + ")");
     times.push_back(t);
   }
   if (times.empty()) throw InputError(times_file, 0, "lists no timestamps");
@@ -225,15 +225,16 @@ Located locateTum(const std::string& spec, const SequenceOptions& options) {
                          listOfTumNames() + " (tools/fetch_dataset.sh --list prints all)");
   std::vector<std::string> looked;
   for (const std::string& root : dataSearchRoots(options)) {
-    for (const fs::path& candidate : {fs::path(root) / "tum" / info->archive_name, fs::path(root) / info->archive_name}) {
+    for (const fs::path& candidate :
+         {fs::path(root) / "tum" / info->archive_name, fs::path(root) / info->archive_name}) {
       looked.push_back(candidate.string());
       if (fs::is_directory(candidate)) return {candidate, SequenceKind::Tum, info->camera, {}};
     }
   }
-  throw SequenceNotFound(spec, 0,
-                         "sequence not found; looked in " + joined(looked, ", ") + ". Fetch it with "
-                         "'tools/fetch_dataset.sh tum/" + info->short_name + "' (needs internet), or download " +
-                             tumArchiveUrl(*info) + " by hand and unpack it into " + fetchDataRoot(options) + "/tum/");
+  const std::string how_to_get = "Fetch it with 'tools/fetch_dataset.sh tum/" + info->short_name +
+                                 "' (needs internet), or download " + tumArchiveUrl(*info) +
+                                 " by hand and unpack it into " + fetchDataRoot(options) + "/tum/";
+  throw SequenceNotFound(spec, 0, "sequence not found; looked in " + joined(looked, ", ") + ". " + how_to_get);
 }
 
 Located locateKitti(const std::string& spec, const SequenceOptions& options) {
@@ -255,15 +256,16 @@ Located locateKitti(const std::string& spec, const SequenceOptions& options) {
   throw SequenceNotFound(spec, 0,
                          "sequence not found; looked in " + joined(looked, ", ") +
                              ". KITTI odometry needs registration at cvlibs.net: download the grey images and "
-                             "poses and unpack them so that " + fetchDataRoot(options) + "/kitti/sequences/" + nn +
-                             "/image_0/ and " + fetchDataRoot(options) + "/kitti/poses/" + nn + ".txt exist");
+                             "poses and unpack them so that " +
+                             fetchDataRoot(options) + "/kitti/sequences/" + nn + "/image_0/ and " +
+                             fetchDataRoot(options) + "/kitti/poses/" + nn + ".txt exist");
 }
 
 Located locateFolder(const std::string& spec) {
   const fs::path folder = spec;
-  const std::string folder_name = fs::absolute(folder).lexically_normal().filename().string().empty()
-                                      ? fs::absolute(folder).lexically_normal().parent_path().filename().string()
-                                      : fs::absolute(folder).lexically_normal().filename().string();
+  fs::path normalized = fs::absolute(folder).lexically_normal();
+  if (normalized.filename().empty()) normalized = normalized.parent_path();  // "dir/" -> "dir"
+  const std::string folder_name = normalized.filename().string();
   static const std::regex kTumName(R"(rgbd_dataset_freiburg([123])_.+)");
   static const std::regex kKittiName(R"(\d{2})");
   std::smatch match;
@@ -276,8 +278,7 @@ Located locateFolder(const std::string& spec) {
     // Standard odometry layout: <root>/sequences/NN beside <root>/poses/NN.txt.
     if (std::regex_match(folder_name, kKittiName)) {
       located.camera = kittiCameraFor(std::stoi(folder_name));
-      located.kitti_poses = fs::absolute(folder).lexically_normal().parent_path().parent_path() / "poses" /
-                            (folder_name + ".txt");
+      located.kitti_poses = normalized.parent_path().parent_path() / "poses" / (folder_name + ".txt");
     }
     return located;
   }
@@ -321,7 +322,8 @@ Sequence openSequence(const std::string& spec, const SequenceOptions& options) {
   } else if (fs::exists(spec)) {
     throw InputError(spec, 0, "is a file, not a sequence folder");
   } else {
-    throw InputError(spec, 0, "no such folder, and not a sequence name (tum/<name> such as tum/fr1_xyz, or kitti/<NN>)");
+    throw InputError(spec, 0,
+                     "no such folder, and not a sequence name (tum/<name> such as tum/fr1_xyz, or kitti/<NN>)");
   }
 
   Sequence sequence;
@@ -333,6 +335,11 @@ Sequence openSequence(const std::string& spec, const SequenceOptions& options) {
     readTumFolder(sequence);
   else
     readKittiFolder(sequence, located.kitti_poses);
+
+  // A KITTI sequence's own files define its camera: calib.txt the intrinsics
+  // (read above), the images their size (sequences 13-21 have no camera file of their own).
+  if (located.kind == SequenceKind::Kitti && options.config_path.empty())
+    sequence.config.camera.width = sequence.config.camera.height = 0;
 
   // ORB-SLAM2 settings files carry no image size: take it from the first image.
   PinholeCamera& camera = sequence.config.camera;
@@ -386,9 +393,9 @@ cv::Mat Sequence::loadGray(size_t i) const {
 cv::Mat Sequence::loadDepthMeters(size_t i) const {
   const FrameEntry& frame = frames.at(i);
   if (frame.depth_path.empty())
-    throw InputError((fs::path(root) / "depth.txt").string(), 0,
-                     "no depth image within 0.02 s of colour frame " + std::to_string(i) + " (" + frame.image_path +
-                         ")");
+    throw InputError(
+        (fs::path(root) / "depth.txt").string(), 0,
+        "no depth image within 0.02 s of colour frame " + std::to_string(i) + " (" + frame.image_path + ")");
   const cv::Mat raw = readImage(frame.depth_path, cv::IMREAD_UNCHANGED, 0, "depth.txt");
   if (raw.type() != CV_16UC1) throw InputError(frame.depth_path, 0, "depth image is not a single-channel 16-bit PNG");
   if (config.camera.depth_factor <= 0)

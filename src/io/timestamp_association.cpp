@@ -20,8 +20,7 @@ std::vector<std::pair<int, int>> associateTimestamps(const std::vector<double>& 
     auto it = std::lower_bound(second.begin(), second.end(), first[i] - max_difference);
     for (; it != second.end() && *it < first[i] + max_difference; ++it) {
       const double difference = std::abs(first[i] - *it);
-      if (difference < max_difference)
-        candidates.push_back({difference, i, static_cast<int>(it - second.begin())});
+      if (difference < max_difference) candidates.push_back({difference, i, static_cast<int>(it - second.begin())});
     }
   }
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {

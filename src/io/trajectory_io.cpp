@@ -40,8 +40,8 @@ std::vector<StampedPose> readTumTrajectory(const std::string& path) {
   std::vector<StampedPose> poses;
   for (const TextRow& row : readTextRows(path)) {
     if (row.fields.size() != 8) {
-      std::string what = "expected 8 fields 'timestamp tx ty tz qx qy qz qw', found " +
-                         std::to_string(row.fields.size());
+      std::string what =
+          "expected 8 fields 'timestamp tx ty tz qx qy qz qw', found " + std::to_string(row.fields.size());
       if (row.fields.size() == 12) what += " (a KITTI trajectory? use the KITTI format)";
       throw InputError(path, row.line, what);
     }
@@ -83,8 +83,8 @@ std::vector<StampedPose> readKittiTrajectory(const std::string& path, const std:
   for (size_t i = 0; i < rows.size(); ++i) {
     const TextRow& row = rows[i];
     if (row.fields.size() != 12) {
-      std::string what = "expected 12 numbers (3x4 matrix [R|t], row-major), found " +
-                         std::to_string(row.fields.size());
+      std::string what =
+          "expected 12 numbers (3x4 matrix [R|t], row-major), found " + std::to_string(row.fields.size());
       if (row.fields.size() == 8) what += " (a TUM trajectory? use the TUM format)";
       throw InputError(path, row.line, what);
     }

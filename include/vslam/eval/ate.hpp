@@ -29,7 +29,7 @@ struct AteResult {
   double rmse_m = 0, mean_m = 0, median_m = 0, std_m = 0, min_m = 0, max_m = 0;
   double scale = 1.0;  // scale of `alignment` (1 for SE3)
   int pairs = 0;
-  Sim3 alignment;      // maps estimate positions into the ground-truth frame
+  Sim3 alignment;                              // maps estimate positions into the ground-truth frame
   std::vector<double> errors_m;                // one per pair, in the order of pairs_idx
   std::vector<std::pair<int, int>> pairs_idx;  // (estimate index, ground-truth index), by increasing time
 };
@@ -40,8 +40,8 @@ AteResult computeAte(const std::vector<StampedPose>& estimate, const std::vector
 
 // Index pairs (estimate, ground truth) by the chosen association; shared with the RPE.
 std::vector<std::pair<int, int>> associatePoses(const std::vector<StampedPose>& estimate,
-                                                const std::vector<StampedPose>& groundtruth,
-                                                Association association, double max_time_diff);
+                                                const std::vector<StampedPose>& groundtruth, Association association,
+                                                double max_time_diff);
 
 // {"rmse_m", "mean_m", "median_m", "std_m", "min_m", "max_m", "scale", "pairs"}
 nlohmann::json toJson(const AteResult& result);

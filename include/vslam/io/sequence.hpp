@@ -21,11 +21,11 @@ namespace vslam {
 enum class SequenceKind { Tum, Kitti };
 
 struct FrameEntry {
-  int index = 0;            // 0-based position in the sequence
-  double timestamp = 0.0;   // seconds
-  std::string image_path;   // absolute path of the colour / grey image
-  std::string depth_path;   // absolute path of the paired depth image, "" if none
-  int list_line = 0;        // line of rgb.txt naming the image (TUM), 0 for KITTI; for error messages
+  int index = 0;           // 0-based position in the sequence
+  double timestamp = 0.0;  // seconds
+  std::string image_path;  // absolute path of the colour / grey image
+  std::string depth_path;  // absolute path of the paired depth image, "" if none
+  int list_line = 0;       // line of rgb.txt naming the image (TUM), 0 for KITTI; for error messages
 };
 
 struct SequenceOptions {
@@ -35,16 +35,16 @@ struct SequenceOptions {
 
 class Sequence {
  public:
-  std::string name;               // "tum/fr1_xyz", "kitti/00", or the folder path given
-  std::string root;               // absolute folder of the sequence
+  std::string name;  // "tum/fr1_xyz", "kitti/00", or the folder path given
+  std::string root;  // absolute folder of the sequence
   SequenceKind kind = SequenceKind::Tum;
-  Config config;                  // camera + pipeline parameters (from config/<camera>.yaml or --config)
+  Config config;  // camera + pipeline parameters (from config/<camera>.yaml or --config)
   std::vector<FrameEntry> frames;
   std::vector<StampedPose> groundtruth;  // T_wc; KITTI: one per frame, timestamp = times.txt
   std::string groundtruth_path;          // "" when the sequence has none
 
   bool hasGroundTruth() const { return !groundtruth.empty(); }
-  bool hasDepth() const;                 // every frame has a depth image
+  bool hasDepth() const;  // every frame has a depth image
   int framesWithDepth() const;
 
   // Images are decoded on demand; each throws InputError naming the image file

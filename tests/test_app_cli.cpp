@@ -1,0 +1,257 @@
+// The `vslam` binary end to end: `run` (stage 1) on the shared data, fetching a
+// missing TUM sequence through tools/fetch_dataset.sh, and `eval`, including
+// exit status 2 with a one-line message on bad input.
+#include <sys/wait.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+#include "vslam/eval/ate.hpp"
+#include "vslam/io/trajectory_io.hpp"
+
+namespace vslam {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Outcome {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+std::string quoted(const std::string& text) { return "'" + text + "'"; }
+
+std::string slurp(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Runs `prefix vslam args` from the project root (as a user would), with no $VSLAM_DATA.
+Outcome vslam(const std::string& args, const std::string& env = "") {
+  // One folder per test and call: ctest may run tests of this file in parallel.
+  static int call = 0;
+  const fs::path dir =
+      test::scratchDir(std::string("cli_io_") + ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
+                       std::to_string(++call));
+  const std::string command = "cd " + quoted(test::sourceDir().string()) + " && env -u VSLAM_DATA " + env + " " +
+                              quoted(std::string(VSLAM_BINARY_DIR) + "/vslam") + " " + args + " > " +
+                              quoted((dir / "out").string()) + " 2> " + quoted((dir / "err").string());
+  const int status = std::system(command.c_str());
+  Outcome outcome;
+  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  outcome.out = slurp(dir / "out");
+  outcome.err = slurp(dir / "err");
+  return outcome;
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// Lines of stderr that are not spdlog's "[hh:mm:ss.mmm] [level] ..." logs.
+std::vector<std::string> errorLines(const std::string& err) {
+  std::vector<std::string> lines;
+  std::istringstream in(err);
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty() && line[0] != '[') lines.push_back(line);
+  return lines;
+}
+
+TEST(CliRun, FindsFr1XyzInTheSharedDataAndReportsIt) {
+  const Outcome run = vslam("run --seq tum/fr1_xyz");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(contains(run.out, "sequence: tum/fr1_xyz\n")) << run.out;
+  EXPECT_TRUE(contains(run.out, "\nframes: 798\n")) << run.out;
+  EXPECT_TRUE(contains(run.out, "camera: tum_fr1 640x480 fx 517.306408 fy 516.469215")) << run.out;
+  EXPECT_TRUE(contains(run.out, "depth: 792 of 798 frames paired")) << run.out;
+  EXPECT_TRUE(contains(run.out, "groundtruth: 3000 poses, 1305031098.665900 .. 1305031128.755500 s")) << run.out;
+  EXPECT_TRUE(contains(run.out, "rgbd_dataset_freiburg1_xyz/groundtruth.txt")) << run.out;
+}
+
+TEST(CliRun, KittiAndMaxFramesAndOutputFolder) {
+  const fs::path out = test::scratchDir("cli_run_out") / "run";
+  const Outcome run = vslam("run --seq kitti/00 --max-frames 10 --detector none --out " + quoted(out.string()));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(contains(run.out, "\nframes: 10 (first 10 of 200)\n")) << run.out;
+  EXPECT_TRUE(contains(run.out, "camera: kitti_00-02 1241x376 fx 718.856")) << run.out;
+  EXPECT_TRUE(contains(run.out, "groundtruth: 200 poses")) << run.out;
+  EXPECT_TRUE(contains(run.out, "detector: none")) << run.out;
+  const nlohmann::json info = nlohmann::json::parse(slurp(out / "sequence.json"));
+  EXPECT_EQ(info["frames"], 10);
+  EXPECT_EQ(info["camera"], "kitti_00-02");
+}
+
+TEST(CliRun, HelpListsEveryOptionAndItsDefault) {
+  const Outcome help = vslam("run --help");
+  EXPECT_EQ(help.exit_code, 0);
+  for (const char* option : {"--seq", "--config", "--data-root", "--mode", "--out", "--detector", "--deterministic",
+                             "--no-fetch", "--max-frames", "=mono", "INT:NONNEGATIVE=0", "default: the config's"})
+    EXPECT_TRUE(contains(help.out, option)) << option << "\n" << help.out;
+}
+
+TEST(CliRun, NotFoundWithoutFetchingExitsTwoWithOneLine) {
+  const fs::path empty = test::scratchDir("cli_not_found");
+  const Outcome run = vslam("run --seq tum/fr2_desk --no-fetch --data-root " + quoted(empty.string()));
+  EXPECT_EQ(run.exit_code, 2);
+  const auto lines = errorLines(run.err);
+  ASSERT_EQ(lines.size(), 1u) << run.err;
+  EXPECT_TRUE(contains(lines[0], "error: tum/fr2_desk: sequence not found; looked in " + empty.string())) << lines[0];
+  EXPECT_TRUE(contains(lines[0], "tools/fetch_dataset.sh tum/fr2_desk")) << lines[0];
+  EXPECT_EQ(run.out, "");
+}
+
+TEST(CliRun, BadConfigExitsTwoNamingTheKey) {
+  const fs::path config = test::scratchDir("cli_bad_config") / "cam.yaml";
+  std::ofstream(config)
+      << "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: five hundred\n  cx: 320\n  cy: 240\n";
+  const Outcome run = vslam("run --seq tum/fr1_xyz --config " + quoted(config.string()));
+  EXPECT_EQ(run.exit_code, 2);
+  const auto lines = errorLines(run.err);
+  ASSERT_EQ(lines.size(), 1u) << run.err;
+  EXPECT_EQ(lines[0], "error: " + config.string() + ":5: key 'camera.fy' has the wrong type (expected a number)");
+}
+
+TEST(CliRun, FetchFailsFastWithoutNetworkAndSaysWhereToPutTheData) {
+  const fs::path empty = test::scratchDir("cli_fetch_offline");
+  const auto start = std::chrono::steady_clock::now();
+  // Port 9 on the loopback refuses at once: the same path as a machine without internet.
+  const Outcome run =
+      vslam("run --seq tum/fr2_desk --data-root " + quoted(empty.string()), "VSLAM_TUM_BASE_URL=http://127.0.0.1:9");
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(20));
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_TRUE(contains(run.err, "download of http://127.0.0.1:9/freiburg2/rgbd_dataset_freiburg2_desk.tgz failed"))
+      << run.err;
+  EXPECT_TRUE(contains(run.err, "unpack it into " + empty.string() + "/tum/")) << run.err;
+  EXPECT_TRUE(contains(run.err, "error: tum/fr2_desk: sequence not found; looked in")) << run.err;
+  EXPECT_TRUE(contains(run.err, "(fetching it failed; see the messages above)")) << run.err;
+  EXPECT_TRUE(fs::is_empty(empty));  // no partial download left behind
+}
+
+// A mirror holding a tiny stand-in for rgbd_dataset_freiburg2_xyz.tgz.
+fs::path makeMirror(const std::string& scratch, bool corrupt) {
+  const fs::path dir = test::scratchDir(scratch);
+  const fs::path sequence = dir / "staging" / "rgbd_dataset_freiburg2_xyz";
+  fs::create_directories(sequence);
+  std::ofstream(sequence / "rgb.txt") << "# color images\n1311867170.462290 rgb/1311867170.462290.png\n"
+                                         "1311867170.494303 rgb/1311867170.494303.png\n";
+  std::ofstream(sequence / "groundtruth.txt") << "1311867170.4622 0 0 0 0 0 0 1\n1311867170.4722 0.01 0 0 0 0 0 1\n";
+  fs::create_directories(dir / "mirror" / "freiburg2");
+  const fs::path archive = dir / "mirror" / "freiburg2" / "rgbd_dataset_freiburg2_xyz.tgz";
+  if (corrupt) {
+    std::ofstream(archive) << "<html>404 not found</html>\n";
+  } else {
+    const std::string tar = "tar -czf " + quoted(archive.string()) + " -C " + quoted((dir / "staging").string()) +
+                            " rgbd_dataset_freiburg2_xyz";
+    EXPECT_EQ(std::system(tar.c_str()), 0);
+  }
+  return dir;
+}
+
+TEST(CliRun, FetchesAMissingTumSequenceAndRetries) {
+  const fs::path dir = makeMirror("cli_fetch_ok", false);
+  const fs::path data = dir / "data";
+  const Outcome run = vslam("run --seq tum/fr2_xyz --data-root " + quoted(data.string()),
+                            "VSLAM_TUM_BASE_URL=" + quoted("file://" + (dir / "mirror").string()));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(contains(run.out, "\nframes: 2\n")) << run.out;
+  EXPECT_TRUE(contains(run.out, "camera: tum_fr2")) << run.out;
+  EXPECT_TRUE(contains(run.out, "groundtruth: 2 poses")) << run.out;
+  EXPECT_TRUE(fs::exists(data / "tum" / "rgbd_dataset_freiburg2_xyz" / "rgb.txt"));
+  EXPECT_FALSE(fs::exists(data / "tum" / "rgbd_dataset_freiburg2_xyz.tgz.part"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(data / "tum"), fs::directory_iterator()), 1);  // archive removed
+}
+
+TEST(CliRun, FetchRejectsACorruptArchive) {
+  const fs::path dir = makeMirror("cli_fetch_corrupt", true);
+  const fs::path data = dir / "data";
+  const Outcome run = vslam("run --seq tum/fr2_xyz --data-root " + quoted(data.string()),
+                            "VSLAM_TUM_BASE_URL=" + quoted("file://" + (dir / "mirror").string()));
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_TRUE(contains(run.err, "is not a valid gzip archive (truncated or corrupted download)")) << run.err;
+  EXPECT_FALSE(fs::exists(data));  // nothing half-unpacked
+}
+
+TEST(CliEval, WritesJsonWithTheFiguresOfComputeAte) {
+  const fs::path dir = test::scratchDir("cli_eval");
+  const std::string gt = (test::tumSequence("freiburg1_xyz") / "groundtruth.txt").string();
+  std::vector<StampedPose> estimate = readTumTrajectory(gt);
+  const Sim3 S(0.25, Eigen::AngleAxisd(1.0, Vec3(0, 1, 1).normalized()).toRotationMatrix(), Vec3(5, 0, -1));
+  for (StampedPose& pose : estimate) pose.T_wc = SE3(S.R * pose.T_wc.R, S * pose.T_wc.t);
+  const std::string est = (dir / "est.txt").string();
+  writeTumTrajectory(est, estimate);
+  const std::string json_path = (dir / "ate.json").string();
+
+  const Outcome eval =
+      vslam("eval --est " + quoted(est) + " --gt " + quoted(gt) + " --align sim3 --json " + quoted(json_path));
+  ASSERT_EQ(eval.exit_code, 0) << eval.err;
+  EXPECT_TRUE(contains(eval.out, "ATE (sim3 alignment, 3000 pairs of 3000 estimated poses): rmse 0.000000 m"))
+      << eval.out;
+  EXPECT_TRUE(contains(eval.out, "scale 4.000000")) << eval.out;
+  EXPECT_TRUE(contains(eval.out, "RPE (interval 1.000000 s")) << eval.out;
+  const nlohmann::json json = nlohmann::json::parse(slurp(json_path));
+  for (const char* key : {"rmse_m", "mean_m", "median_m", "std_m", "min_m", "max_m", "scale", "pairs"})
+    EXPECT_TRUE(json.contains(key)) << key;
+  EXPECT_LT(json["rmse_m"].get<double>(), 1e-7);  // only the file's 9 significant digits remain
+  EXPECT_NEAR(json["scale"].get<double>(), 4.0, 1e-7);
+  EXPECT_EQ(json["pairs"].get<int>(), 3000);
+  EXPECT_EQ(json["alignment"], "sim3");
+  EXPECT_LT(json["rpe"]["trans_rmse"].get<double>(), 1e-6);
+
+  // Same files, SE(3): the figures are those of computeAte in this process.
+  const Outcome rigid = vslam("eval --est " + quoted(est) + " --gt " + quoted(gt) + " --json " + quoted(json_path));
+  ASSERT_EQ(rigid.exit_code, 0) << rigid.err;
+  const AteResult expected = computeAte(readTumTrajectory(est), readTumTrajectory(gt), AteOptions());
+  const nlohmann::json rigid_json = nlohmann::json::parse(slurp(json_path));
+  EXPECT_DOUBLE_EQ(rigid_json["rmse_m"].get<double>(), expected.rmse_m);
+  EXPECT_DOUBLE_EQ(rigid_json["median_m"].get<double>(), expected.median_m);
+  EXPECT_DOUBLE_EQ(rigid_json["scale"].get<double>(), 1.0);
+  EXPECT_GT(expected.rmse_m, 0.1);
+}
+
+TEST(CliEval, KittiFormatPairsByLine) {
+  const std::string poses = (test::sharedData() / "kitti" / "poses" / "00.txt").string();
+  const Outcome eval = vslam("eval --format kitti --est " + quoted(poses) + " --gt " + quoted(poses));
+  ASSERT_EQ(eval.exit_code, 0) << eval.err;
+  EXPECT_TRUE(contains(eval.out, "ATE (se3 alignment, 200 pairs of 200 estimated poses): rmse 0.000000 m")) << eval.out;
+  EXPECT_TRUE(contains(eval.out, "RPE (interval 100.000000 m")) << eval.out;
+  EXPECT_TRUE(contains(eval.out, "translation rmse 0.000000 %")) << eval.out;
+}
+
+TEST(CliEval, MalformedFileExitsTwoWithOneLine) {
+  const fs::path dir = test::scratchDir("cli_eval_bad");
+  const std::string est = (dir / "est.txt").string();
+  std::ofstream(est) << "# estimate\n1.0 0 0 0 0 0 0 1\n1.1 0 0 0 0 0 1\n";
+  const std::string gt = (test::tumSequence("freiburg1_xyz") / "groundtruth.txt").string();
+  const Outcome eval = vslam("eval --est " + quoted(est) + " --gt " + quoted(gt));
+  EXPECT_EQ(eval.exit_code, 2);
+  EXPECT_EQ(eval.err, "error: " + est + ":3: expected 8 fields 'timestamp tx ty tz qx qy qz qw', found 7\n");
+  EXPECT_EQ(eval.out, "");
+
+  const Outcome missing = vslam("eval --est " + quoted(est) + " --gt /nonexistent/gt.txt");
+  EXPECT_EQ(missing.exit_code, 2);
+
+  // Trajectories that do not overlap in time: named, not a crash.
+  std::ofstream(est) << "1.0 0 0 0 0 0 0 1\n1.1 0 0 0 0 0 0 1\n1.2 0 0 0 0 0 0 1\n";
+  const Outcome apart = vslam("eval --est " + quoted(est) + " --gt " + quoted(gt));
+  EXPECT_EQ(apart.exit_code, 2);
+  EXPECT_TRUE(contains(apart.err, "error: " + est + ": only 0 of 3 estimated poses pair with ground truth"))
+      << apart.err;
+}
+
+TEST(CliEval, HelpListsEveryOptionAndItsDefault) {
+  const Outcome help = vslam("eval --help");
+  EXPECT_EQ(help.exit_code, 0);
+  for (const char* option :
+       {"--est", "--gt", "--align", "=se3", "--format", "=tum", "--json", "--max-dt", "=0.02", "--rpe-delta"})
+    EXPECT_TRUE(contains(help.out, option)) << option << "\n" << help.out;
+}
+
+}  // namespace
+}  // namespace vslam

@@ -65,7 +65,7 @@ std::vector<std::string> errorLines(const std::string& err) {
 }
 
 TEST(CliRun, FindsFr1XyzInTheSharedDataAndReportsIt) {
-  const Outcome run = vslam("run --seq tum/fr1_xyz");
+  const Outcome run = vslam("run --seq tum/fr1_xyz --info");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_TRUE(contains(run.out, "sequence: tum/fr1_xyz\n")) << run.out;
   EXPECT_TRUE(contains(run.out, "\nframes: 798\n")) << run.out;
@@ -83,16 +83,17 @@ TEST(CliRun, KittiAndMaxFramesAndOutputFolder) {
   EXPECT_TRUE(contains(run.out, "camera: kitti_00-02 1241x376 fx 718.856")) << run.out;
   EXPECT_TRUE(contains(run.out, "groundtruth: 200 poses")) << run.out;
   EXPECT_TRUE(contains(run.out, "detector: none")) << run.out;
-  const nlohmann::json info = nlohmann::json::parse(slurp(out / "sequence.json"));
-  EXPECT_EQ(info["frames"], 10);
-  EXPECT_EQ(info["camera"], "kitti_00-02");
+  const nlohmann::json report = nlohmann::json::parse(slurp(out / "report.json"));
+  EXPECT_EQ(report["frames_total"], 10);
+  EXPECT_EQ(report["camera"], "kitti_00-02");
+  EXPECT_EQ(report["sequence"], "kitti/00");
 }
 
 TEST(CliRun, HelpListsEveryOptionAndItsDefault) {
   const Outcome help = vslam("run --help");
   EXPECT_EQ(help.exit_code, 0);
   for (const char* option : {"--seq", "--config", "--data-root", "--mode", "--out", "--detector", "--deterministic",
-                             "--no-fetch", "--max-frames", "=mono", "INT:NONNEGATIVE=0", "default: the config's"})
+                             "--no-fetch", "--max-frames", "--info", "=mono", "INT:NONNEGATIVE=0", "default: the config's"})
     EXPECT_TRUE(contains(help.out, option)) << option << "\n" << help.out;
 }
 
@@ -157,7 +158,7 @@ fs::path makeMirror(const std::string& scratch, bool corrupt) {
 TEST(CliRun, FetchesAMissingTumSequenceAndRetries) {
   const fs::path dir = makeMirror("cli_fetch_ok", false);
   const fs::path data = dir / "data";
-  const Outcome run = vslam("run --seq tum/fr2_xyz --data-root " + quoted(data.string()),
+  const Outcome run = vslam("run --seq tum/fr2_xyz --info --data-root " + quoted(data.string()),
                             "VSLAM_TUM_BASE_URL=" + quoted("file://" + (dir / "mirror").string()));
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_TRUE(contains(run.out, "\nframes: 2\n")) << run.out;

@@ -42,7 +42,7 @@ class MapGraphTest : public ::testing::Test {
       frame.descriptors.at<uint8_t>(i, 0) = static_cast<uint8_t>(i);
     }
     frame.T_cw.t = Vec3(x_offset, 0, 0);
-    frame.finalizeFeatures();
+    frame.finalizeFeatures(cv::Rect2f(0, 0, 640, 480));
     return frame;
   }
 

@@ -118,19 +118,5 @@ TEST(RenderCommand, MissingRunFolderFailsWithItsName) {
   EXPECT_NE(message.find("/nonexistent/run"), std::string::npos) << message;
 }
 
-TEST(RenderCommand, AssociationKeepsClosestUniquePairs) {
-  auto poses = [](std::initializer_list<double> times) {
-    std::vector<StampedPose> out;
-    for (double t : times) out.push_back({t, SE3()});
-    return out;
-  };
-  // Estimates 1.000 and 1.011 are both nearest to ground truth 1.005: the
-  // closer (1.000) gets it and 1.011 takes 1.020; 5.0 has no partner.
-  const auto pairs = associateByTimestamp(poses({1.0, 1.011, 5.0}), poses({1.005, 1.02, 3.0}));
-  ASSERT_EQ(pairs.size(), 2u);
-  EXPECT_EQ(pairs[0], std::make_pair(size_t{0}, size_t{0}));
-  EXPECT_EQ(pairs[1], std::make_pair(size_t{1}, size_t{1}));
-}
-
 }  // namespace
 }  // namespace vslam

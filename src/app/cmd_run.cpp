@@ -1,32 +1,29 @@
-// `vslam run`: runs SLAM on a sequence. Stage 1 (this file for now): load the
-// sequence, fetch a missing TUM sequence, and report what was found; the SLAM
-// pipeline fills in the rest.
+// `vslam run`: runs SLAM on a sequence: finds (or fetches) it, reports what was
+// found, then runs the pipeline and writes the run folder (run_slam.cpp).
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <string>
 
 #include <spdlog/spdlog.h>
-#include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "run_slam.hpp"
 #include "vslam/core/error.hpp"
 #include "vslam/io/sequence.hpp"
 
 namespace vslam::app {
 namespace {
 
-struct RunOptions {
+struct RunCommandOptions {
   std::string seq;
   SequenceOptions sequence;
-  std::string mode = "mono";
-  std::string out_dir;
+  RunOptions pipeline;
   std::string detector;  // "" = the config's detector.model
-  bool deterministic = false;
   bool no_fetch = false;
+  bool info_only = false;
   int max_frames = 0;
 };
 
@@ -38,7 +35,7 @@ std::string shellQuoted(const std::string& text) {
 
 // A TUM sequence that is nowhere on disk is fetched from the benchmark's
 // archive by tools/fetch_dataset.sh, then looked up again.
-Sequence openOrFetch(const RunOptions& options) {
+Sequence openOrFetch(const RunCommandOptions& options) {
   try {
     return openSequence(options.seq, options.sequence);
   } catch (const SequenceNotFound& not_found) {
@@ -61,14 +58,14 @@ std::string fixed(double value, int decimals) {
   return text;
 }
 
-int run(RunOptions options) {
+int run(RunCommandOptions options) {
   Sequence sequence = openOrFetch(options);
   const size_t total_frames = sequence.frames.size();
   if (options.max_frames > 0 && static_cast<size_t>(options.max_frames) < total_frames)
     sequence.frames.resize(options.max_frames);
   if (!options.detector.empty()) sequence.config.detector.model = options.detector;
 
-  if (options.mode == "rgbd") {
+  if (options.pipeline.mode == "rgbd") {
     if (sequence.kind == SequenceKind::Kitti)
       throw InputError(sequence.root, 0, "--mode rgbd needs depth images, and KITTI sequences have none");
     if (sequence.framesWithDepth() == 0)
@@ -103,36 +100,19 @@ int run(RunOptions options) {
   } else {
     std::cout << "groundtruth: none\n";
   }
-  std::cout << "mode: " << options.mode << "\n";
+  std::cout << "mode: " << options.pipeline.mode << "\n";
   std::cout << "detector: " << sequence.config.detector.model << "\n";
-  std::cout << "deterministic: " << (options.deterministic ? "yes" : "no") << "\n";
+  std::cout << "deterministic: " << (options.pipeline.deterministic ? "yes" : "no") << "\n";
 
-  if (!options.out_dir.empty()) {
-    std::error_code error;
-    std::filesystem::create_directories(options.out_dir, error);
-    if (error) throw InputError(options.out_dir, 0, "cannot create the output folder: " + error.message());
-    const std::string path = options.out_dir + "/sequence.json";
-    nlohmann::json info = {{"sequence", sequence.name},
-                           {"root", sequence.root},
-                           {"frames", sequence.frames.size()},
-                           {"camera", c.name},
-                           {"config", sequence.config.source},
-                           {"frames_with_depth", sequence.framesWithDepth()},
-                           {"groundtruth_poses", sequence.groundtruth.size()},
-                           {"groundtruth_path", sequence.groundtruth_path},
-                           {"mode", options.mode}};
-    std::ofstream out(path);
-    if (!(out << info.dump(2) << "\n")) throw InputError(path, 0, "cannot write file");
-    std::cout << "output: " << path << "\n";
-  }
-  spdlog::info("stage 1: sequence loaded; tracking, mapping and loop closing are not wired in yet");
-  return 0;
+  std::cout.flush();
+  if (options.info_only) return 0;
+  return runSlam(sequence, options.pipeline);
 }
 
 }  // namespace
 
 Command addRunCommand(CLI::App& app) {
-  auto options = std::make_shared<RunOptions>();
+  auto options = std::make_shared<RunCommandOptions>();
   Command command;
   CLI::App* cli = app.add_subcommand("run", "Run SLAM on a sequence");
   cli->add_option("--seq", options->seq,
@@ -145,19 +125,22 @@ Command addRunCommand(CLI::App& app) {
   cli->add_option("--data-root", options->sequence.data_root,
                   "Folder searched first for named sequences (then $VSLAM_DATA, ./data, ../shared/data) (default: "
                   "none)");
-  cli->add_option("--mode", options->mode, "Sensor mode")
+  cli->add_option("--mode", options->pipeline.mode, "Sensor mode")
       ->check(CLI::IsMember({"mono", "rgbd"}))
       ->capture_default_str();
-  cli->add_option("--out", options->out_dir, "Output folder (default: none)");
+  cli->add_option("--out", options->pipeline.out_dir, "Output folder (default: runs/<sequence>-<date>-<time>)");
   cli->add_option("--detector", options->detector,
                   "Object detector model, or 'none' (default: the config's detector.model)");
-  cli->add_flag("--deterministic", options->deterministic,
+  cli->add_flag("--deterministic", options->pipeline.deterministic,
                 "Run the threads in lock-step so that repeated runs give identical results (default: off)");
   cli->add_flag("--no-fetch", options->no_fetch,
                 "Do not download a TUM sequence that is not found (default: fetch with tools/fetch_dataset.sh)");
   cli->add_option("--max-frames", options->max_frames, "Process only the first N frames; 0 = all")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  cli->add_flag("--info", options->info_only,
+                "Only find the sequence and print what it holds (frames, camera, ground truth); run nothing "
+                "(default: off)");
   command.cli = cli;
   command.run = [options] { return run(*options); };
   return command;

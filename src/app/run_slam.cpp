@@ -14,6 +14,8 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include "vslam/core/error.hpp"
+
 #include "vslam/eval/ate.hpp"
 #include "vslam/io/ply.hpp"
 #include "vslam/io/trajectory_io.hpp"
@@ -126,7 +128,9 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   if (!mono && !sequence.hasDepth())
     throw InputError(sequence.root, 0, "--mode rgbd needs depth images (depth.txt), and this sequence has none");
   const std::string out_dir = options.out_dir.empty() ? defaultOutDir(sequence.name) : options.out_dir;
-  fs::create_directories(out_dir);
+  std::error_code error;
+  fs::create_directories(out_dir, error);
+  if (error) throw InputError(out_dir, 0, "cannot create the output folder: " + error.message());
 
   const size_t begin = std::min<size_t>(options.start_frame, sequence.frames.size());
   size_t end = sequence.frames.size();

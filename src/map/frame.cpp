@@ -6,18 +6,14 @@ namespace vslam {
 
 double ScalePyramid::logScaleFactor() const { return std::log(scale_factor); }
 
-void Frame::finalizeFeatures() {
+void Frame::finalizeFeatures(const cv::Rect2f& bounds) {
   const size_t n = keypoints.size();
   map_points.assign(n, nullptr);
   outlier.assign(n, false);
   if (labels.size() != n) labels.assign(n, FeatureLabel{});
-  std::vector<cv::Point2f> undistorted(n);
   std::vector<int> levels(n);
-  for (size_t i = 0; i < n; ++i) {
-    undistorted[i] = cv::Point2f(static_cast<float>(points[i].x()), static_cast<float>(points[i].y()));
-    levels[i] = keypoints[i].octave;
-  }
-  grid.build(undistorted, levels, camera->width, camera->height);
+  for (size_t i = 0; i < n; ++i) levels[i] = keypoints[i].octave;
+  grid = FeatureGrid(points, std::move(levels), bounds);
 }
 
 int Frame::trackedCount() const {

@@ -12,6 +12,8 @@
 #include <spdlog/spdlog.h>
 
 #include "vslam/core/error.hpp"
+#include "vslam/eval/ate.hpp"
+#include "vslam/io/trajectory_io.hpp"
 #include "vslam/io/ply.hpp"
 #include "vslam/render/map_render.hpp"
 #include "vslam/render/trajectory_plot.hpp"
@@ -20,53 +22,6 @@ namespace fs = std::filesystem;
 
 namespace vslam {
 namespace {
-
-// Numbers of each non-comment line; InputError names the file and line.
-std::vector<std::pair<int, std::vector<double>>> readNumberLines(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, 0, "cannot open");
-  std::vector<std::pair<int, std::vector<double>>> rows;
-  std::string line;
-  int line_number = 0;
-  while (std::getline(in, line)) {
-    ++line_number;
-    const size_t start = line.find_first_not_of(" \t\r");
-    if (start == std::string::npos || line[start] == '#') continue;
-    std::istringstream fields(line);
-    std::vector<double> numbers;
-    std::string field;
-    while (fields >> field) {
-      try {
-        size_t used = 0;
-        numbers.push_back(std::stod(field, &used));
-        if (used != field.size()) throw std::invalid_argument(field);
-      } catch (const std::exception&) {
-        throw InputError(path, line_number, "not a number: \"" + field + "\"");
-      }
-    }
-    rows.push_back({line_number, numbers});
-  }
-  return rows;
-}
-
-// TUM lines have 8 numbers; a keyframe file may put an id in front (9). The
-// pose is always the last seven, the timestamp the one before them.
-std::vector<StampedPose> readPoses(const std::string& path) {
-  std::vector<StampedPose> poses;
-  for (const auto& [line_number, numbers] : readNumberLines(path)) {
-    if (numbers.size() != 8 && numbers.size() != 9)
-      throw InputError(path, line_number,
-                       "expected \"timestamp tx ty tz qx qy qz qw\" (8 numbers), got " + std::to_string(numbers.size()));
-    const double* pose = numbers.data() + numbers.size() - 7;
-    StampedPose stamped;
-    stamped.timestamp = pose[-1];
-    stamped.T_wc = SE3(Quat(pose[6], pose[3], pose[4], pose[5]), Vec3(pose[0], pose[1], pose[2]));
-    poses.push_back(stamped);
-  }
-  std::stable_sort(poses.begin(), poses.end(),
-                   [](const StampedPose& a, const StampedPose& b) { return a.timestamp < b.timestamp; });
-  return poses;
-}
 
 nlohmann::json readJson(const std::string& path) {
   std::ifstream in(path);
@@ -124,38 +79,42 @@ std::string resolveGroundTruth(const std::string& file, const fs::path& run_dir)
   return (run_dir / file).string();
 }
 
-// The estimate aligned to the ground truth (Umeyama; with scale for monocular
-// runs), restricted to the associated poses, and the ground truth over the
-// estimate's time span.
+// The estimate aligned to the ground truth (the ATE's alignment: Sim(3) for
+// monocular runs), restricted to the associated poses, and the ground truth
+// over the estimate's time span.
 TrajectoryPlotInput alignedTrajectory(const std::vector<StampedPose>& estimate,
                                       const std::vector<StampedPose>& groundtruth, bool with_scale,
                                       double& ate_rmse_m) {
   TrajectoryPlotInput input;
-  const auto pairs = associateByTimestamp(estimate, groundtruth);
-  if (pairs.size() < 3) {
-    spdlog::warn("render: only {} estimate poses match the ground truth within 0.02 s; plotting the estimate alone",
-                 pairs.size());
+  AteOptions options;
+  options.alignment = with_scale ? Alignment::Sim3 : Alignment::SE3;
+  AteResult ate;
+  try {
+    ate = computeAte(estimate, groundtruth, options);
+  } catch (const InputError& e) {
+    spdlog::warn("render: {}; plotting the estimate alone", e.what());
     for (const auto& pose : estimate) input.estimate.push_back(pose.T_wc.t);
     return input;
   }
-  Eigen::Matrix3Xd from(3, pairs.size()), to(3, pairs.size());
-  for (size_t i = 0; i < pairs.size(); ++i) {
-    from.col(i) = estimate[pairs[i].first].T_wc.t;
-    to.col(i) = groundtruth[pairs[i].second].T_wc.t;
+  for (size_t i = 0; i < ate.pairs_idx.size(); ++i) {
+    input.estimate.push_back(ate.alignment * estimate[ate.pairs_idx[i].first].T_wc.t);
+    input.error_m.push_back(ate.errors_m[i]);
   }
-  const Mat4 similarity = Eigen::umeyama(from, to, with_scale);
-  double squared_sum = 0.0;
-  for (size_t i = 0; i < pairs.size(); ++i) {
-    const Vec3 aligned = (similarity * from.col(i).homogeneous()).head<3>();
-    input.estimate.push_back(aligned);
-    input.error_m.push_back((aligned - to.col(i)).norm());
-    squared_sum += input.error_m.back() * input.error_m.back();
-  }
-  ate_rmse_m = std::sqrt(squared_sum / pairs.size());
+  ate_rmse_m = ate.rmse_m;
   const double first = estimate.front().timestamp - 0.5, last = estimate.back().timestamp + 0.5;
   for (const auto& pose : groundtruth)
     if (pose.timestamp >= first && pose.timestamp <= last) input.groundtruth.push_back(pose.T_wc.t);
   return input;
+}
+
+// Ground truth in TUM format; another format (KITTI poses) is reported and skipped.
+std::vector<StampedPose> readGroundTruth(const std::string& path) {
+  try {
+    return readTumTrajectory(path);
+  } catch (const InputError& e) {
+    spdlog::warn("render: ground truth not in TUM format ({}); plotting the estimate alone", e.what());
+    return {};
+  }
 }
 
 std::vector<MapRenderObject> readObjects(const std::string& path) {
@@ -196,33 +155,6 @@ std::vector<MapRenderObject> readObjects(const std::string& path) {
 
 }  // namespace
 
-std::vector<StampedPose> readTumTrajectory(const std::string& path) { return readPoses(path); }
-
-std::vector<std::pair<size_t, size_t>> associateByTimestamp(const std::vector<StampedPose>& estimate,
-                                                            const std::vector<StampedPose>& groundtruth,
-                                                            double max_dt) {
-  struct Candidate { double dt; size_t estimate, groundtruth; };
-  std::vector<Candidate> candidates;
-  for (size_t i = 0; i < estimate.size(); ++i) {
-    const double t = estimate[i].timestamp;
-    auto it = std::lower_bound(groundtruth.begin(), groundtruth.end(), t - max_dt,
-                               [](const StampedPose& pose, double time) { return pose.timestamp < time; });
-    for (; it != groundtruth.end() && it->timestamp <= t + max_dt; ++it)
-      candidates.push_back({std::abs(it->timestamp - t), i, static_cast<size_t>(it - groundtruth.begin())});
-  }
-  std::stable_sort(candidates.begin(), candidates.end(),
-                   [](const Candidate& a, const Candidate& b) { return a.dt < b.dt; });
-  std::vector<bool> estimate_used(estimate.size()), groundtruth_used(groundtruth.size());
-  std::vector<std::pair<size_t, size_t>> pairs;
-  for (const Candidate& c : candidates) {
-    if (estimate_used[c.estimate] || groundtruth_used[c.groundtruth]) continue;
-    estimate_used[c.estimate] = groundtruth_used[c.groundtruth] = true;
-    pairs.push_back({c.estimate, c.groundtruth});
-  }
-  std::sort(pairs.begin(), pairs.end());
-  return pairs;
-}
-
 std::vector<std::string> renderRunFolder(const std::string& run_dir_text, const std::string& out_dir) {
   const fs::path run_dir(run_dir_text);
   if (!fs::is_directory(run_dir)) throw InputError(run_dir_text, 0, "not a run folder (no such directory)");
@@ -234,13 +166,17 @@ std::vector<std::string> renderRunFolder(const std::string& run_dir_text, const 
   if (fs::exists(run_dir / "report.json")) report = readReport((run_dir / "report.json").string());
 
   std::vector<StampedPose> estimate;
-  if (fs::exists(run_dir / "trajectory.txt")) estimate = readPoses((run_dir / "trajectory.txt").string());
+  if (fs::exists(run_dir / "trajectory.txt")) estimate = readTumTrajectory((run_dir / "trajectory.txt").string());
   if (!estimate.empty()) {
     TrajectoryPlotInput input;
     const std::string groundtruth_path = resolveGroundTruth(report.groundtruth_file, run_dir);
     double computed_ate = -1.0;
     if (!groundtruth_path.empty()) {
-      input = alignedTrajectory(estimate, readPoses(groundtruth_path), report.mode == "mono", computed_ate);
+      const std::vector<StampedPose> groundtruth = readGroundTruth(groundtruth_path);
+      if (groundtruth.empty())
+        for (const auto& pose : estimate) input.estimate.push_back(pose.T_wc.t);
+      else
+        input = alignedTrajectory(estimate, groundtruth, report.mode == "mono", computed_ate);
     } else {
       spdlog::info("render: no groundtruth_file in report.json; plotting the estimate alone");
       for (const auto& pose : estimate) input.estimate.push_back(pose.T_wc.t);
@@ -260,7 +196,7 @@ std::vector<std::string> renderRunFolder(const std::string& run_dir_text, const 
     for (const PlyPoint& point : readMapPly((run_dir / "map.ply").string()))
       map.points.push_back({point.position, point.bgr, point.class_id});
   if (fs::exists(run_dir / "keyframes.txt"))
-    for (const StampedPose& keyframe : readPoses((run_dir / "keyframes.txt").string()))
+    for (const StampedPose& keyframe : readTumTrajectory((run_dir / "keyframes.txt").string()))
       map.keyframes.push_back({keyframe.T_wc});
   if (fs::exists(run_dir / "objects.json")) map.objects = readObjects((run_dir / "objects.json").string());
   for (const auto& pose : estimate) map.trajectory.push_back(pose.T_wc.t);

@@ -11,9 +11,11 @@ FrameBuilder::FrameBuilder(const Config& config, const PinholeCamera& camera)
   pyramid_.scale = extractor_.scaleFactors();
   pyramid_.sigma2 = extractor_.levelSigma2();
   pyramid_.inv_sigma2 = extractor_.invLevelSigma2();
+  undistorted_bounds_ = undistortedImageBounds(camera_);
 }
 
-Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m) const {
+Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m,
+                          int n_features) const {
   Frame frame;
   frame.id = id;
   frame.index = index;
@@ -27,15 +29,13 @@ Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& b
   else
     gray = bgr;
   const ImagePyramid image_pyramid = extractor_.buildPyramid(gray);
-  extractor_.extract(image_pyramid, frame.keypoints, frame.descriptors);
+  extractor_.extract(image_pyramid, frame.keypoints, frame.descriptors, cv::Rect(), n_features);
 
   std::vector<cv::Point2f> distorted(frame.keypoints.size());
   for (size_t i = 0; i < frame.keypoints.size(); ++i) distorted[i] = frame.keypoints[i].pt;
-  const std::vector<cv::Point2f> undistorted = camera_.undistort(distorted);
-  frame.points.resize(undistorted.size());
-  frame.colours.resize(undistorted.size());
-  for (size_t i = 0; i < undistorted.size(); ++i) {
-    frame.points[i] = Vec2(undistorted[i].x, undistorted[i].y);
+  frame.points = camera_.undistort(distorted);
+  frame.colours.resize(distorted.size());
+  for (size_t i = 0; i < distorted.size(); ++i) {
     const cv::Point p(cvRound(distorted[i].x), cvRound(distorted[i].y));
     if (bgr.channels() == 3)
       frame.colours[i] = bgr.at<cv::Vec3b>(p);
@@ -47,7 +47,7 @@ Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& b
     for (size_t i = 0; i < distorted.size(); ++i)
       frame.depth[i] = depth_m.at<float>(cvRound(distorted[i].y), cvRound(distorted[i].x));
   }
-  frame.finalizeFeatures();
+  frame.finalizeFeatures(undistorted_bounds_);
   return frame;
 }
 

@@ -17,21 +17,6 @@ constexpr size_t kFuseNeighbours = 20;
 constexpr size_t kFuseSecondNeighbours = 5;
 constexpr double kMinParallaxCos = 0.9998;
 
-Mat3 skew(const Vec3& v) {
-  Mat3 m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
-// Fundamental matrix mapping points of keyframe 2 to epipolar lines in keyframe 1.
-Mat3 fundamental12(const KeyFrame& kf1, const KeyFrame& kf2) {
-  const Mat3 R12 = kf1.pose().R * kf2.pose().R.transpose();
-  const Vec3 t12 = -R12 * kf2.pose().t + kf1.pose().t;
-  const Mat3 K1 = kf1.camera().Keigen();
-  const Mat3 K2 = kf2.camera().Keigen();
-  return K1.transpose().inverse() * skew(t12) * R12 * K2.inverse();
-}
-
 }  // namespace
 
 LocalMapping::LocalMapping(const Config& config, Map& map, StageTimer* timer)
@@ -197,8 +182,7 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
     const Vec3 C2 = neighbour->cameraCentre();
     // Too short a baseline for the scene depth gives unreliable depth.
     if ((C2 - C1).norm() / neighbour->medianSceneDepth() < 0.01) continue;
-    const Mat3 F12 = fundamental12(*keyframe, *neighbour);
-    const std::vector<std::pair<int, int>> matches = searchForTriangulation(*keyframe, *neighbour, F12);
+    const std::vector<std::pair<int, int>> matches = searchForTriangulation(*keyframe, *neighbour);
     const SE3& T2 = neighbour->pose();
     Eigen::Matrix<double, 3, 4> P1, P2;
     P1 << T1.R, T1.t;
@@ -206,8 +190,8 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
     for (const auto& [i1, i2] : matches) {
       const cv::KeyPoint& kp1 = keyframe->keypoints[i1];
       const cv::KeyPoint& kp2 = neighbour->keypoints[i2];
-      const Vec3 xn1 = K_inv * keyframe->points[i1].homogeneous();
-      const Vec3 xn2 = K_inv * neighbour->points[i2].homogeneous();
+      const Vec3 xn1 = K_inv * keyframe->point(i1).homogeneous();
+      const Vec3 xn2 = K_inv * neighbour->point(i2).homogeneous();
       const Vec3 ray1 = T1.R.transpose() * xn1;
       const Vec3 ray2 = T2.R.transpose() * xn2;
       const double parallax_cos = ray1.dot(ray2) / (ray1.norm() * ray2.norm());
@@ -217,8 +201,8 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
       const Vec3 p1 = T1 * X, p2 = T2 * X;
       if (p1.z() <= 0 || p2.z() <= 0) continue;
       // Reprojection within the 95 % chi-square bound at each keypoint's scale.
-      if ((camera.project(p1) - keyframe->points[i1]).squaredNorm() > 5.991 * pyramid.sigma2[kp1.octave]) continue;
-      if ((neighbour->camera().project(p2) - neighbour->points[i2]).squaredNorm() >
+      if ((camera.project(p1) - keyframe->point(i1)).squaredNorm() > 5.991 * pyramid.sigma2[kp1.octave]) continue;
+      if ((neighbour->camera().project(p2) - neighbour->point(i2)).squaredNorm() >
           5.991 * pyramid.sigma2[kp2.octave])
         continue;
       // The distance ratio must agree with the pyramid levels the point was seen at.
@@ -332,7 +316,7 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
       for (const auto& [kf, index] : points[p]->observations()) {
         auto it = slot.find(kf);
         if (it == slot.end()) continue;
-        problem.observations.push_back({it->second, static_cast<int>(p), kf->points[index],
+        problem.observations.push_back({it->second, static_cast<int>(p), kf->point(index),
                                         pyramid.inv_sigma2[kf->keypoints[index].octave]});
       }
     }

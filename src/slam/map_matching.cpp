@@ -12,8 +12,6 @@ namespace {
 // Wider windows for points seen obliquely: their appearance is less stable.
 double radiusByViewingCos(double view_cos) { return view_cos > 0.998 ? 2.5 : 4.0; }
 
-double angleDifferenceDeg(const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.angle - b.angle; }
-
 struct BestTwo {
   int best_distance = std::numeric_limits<int>::max();
   int second_distance = std::numeric_limits<int>::max();
@@ -62,10 +60,10 @@ int searchByProjection(Frame& current, const Frame& last, double radius_px, bool
     current.map_points[best.best_index] = point;
     ++matches;
     if (check_orientation)
-      rotation.add(best.best_index, angleDifferenceDeg(last.keypoints[i], current.keypoints[best.best_index]));
+      rotation.add(last.keypoints[i].angle, current.keypoints[best.best_index].angle, best.best_index);
   }
   if (check_orientation)
-    for (int j : rotation.inconsistent()) {
+    for (int j : rotation.rejectedMatches()) {
       current.map_points[j] = nullptr;
       --matches;
     }
@@ -146,9 +144,9 @@ int searchByProjection(Frame& frame, const KeyFrame& keyframe, const std::vector
     if (best.best_index < 0 || best.best_distance > max_descriptor_distance) continue;
     frame.map_points[best.best_index] = point;
     ++matches;
-    rotation.add(best.best_index, angleDifferenceDeg(keyframe.keypoints[i], frame.keypoints[best.best_index]));
+    rotation.add(keyframe.keypoints[i].angle, frame.keypoints[best.best_index].angle, best.best_index);
   }
-  for (int j : rotation.inconsistent()) {
+  for (int j : rotation.rejectedMatches()) {
     frame.map_points[j] = nullptr;
     --matches;
   }
@@ -173,9 +171,9 @@ int searchByDescriptor(const KeyFrame& keyframe, const Frame& frame, std::vector
     if (!matches[best.best_index]) ++count;
     matches[best.best_index] = point;
     best_distance_at[best.best_index] = best.best_distance;
-    rotation.add(best.best_index, angleDifferenceDeg(keyframe.keypoints[i], frame.keypoints[best.best_index]));
+    rotation.add(keyframe.keypoints[i].angle, frame.keypoints[best.best_index].angle, best.best_index);
   }
-  for (int j : rotation.inconsistent())
+  for (int j : rotation.rejectedMatches())
     if (matches[j]) {
       matches[j] = nullptr;
       --count;
@@ -208,7 +206,7 @@ int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius
       const int kp_level = keyframe->keypoints[j].octave;
       if (kp_level < level - 1 || kp_level > level) continue;
       // Reprojection gate at the keypoint's scale (chi-square 2 dof, 95 %).
-      const double e2 = (keyframe->points[j] - px).squaredNorm();
+      const double e2 = (keyframe->point(j) - px).squaredNorm();
       if (e2 * pyramid.inv_sigma2[kp_level] > 5.99) continue;
       const int d = hammingDistance(point->descriptor().ptr<uint8_t>(), keyframe->descriptors.ptr<uint8_t>(j));
       if (d < best_distance) {
@@ -236,57 +234,13 @@ int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius
 
 namespace vslam {
 
-std::vector<std::pair<int, int>> searchForTriangulation(const KeyFrame& kf1, const KeyFrame& kf2, const Mat3& F12) {
-  const ScalePyramid& pyramid = kf1.pyramid();
-  // The epipole: kf1's centre seen in kf2. Points next to it have degenerate depth.
-  const Vec3 C1_in_2 = kf2.pose() * kf1.cameraCentre();
-  const Vec2 epipole = kf2.camera().project(C1_in_2);
-  const bool epipole_valid = C1_in_2.z() > 0;
-
-  std::vector<int> best_for_2(kf2.size(), -1);
-  std::vector<int> best_distance_2(kf2.size(), kDescriptorLowThreshold + 1);
-  std::vector<int> match_of_1(kf1.size(), -1);
-  RotationHistogram rotation;
-  for (size_t i1 = 0; i1 < kf1.size(); ++i1) {
-    if (kf1.mapPoint(i1)) continue;
-    const uint8_t* d1 = kf1.descriptors.ptr<uint8_t>(i1);
-    const Vec3 x1 = kf1.points[i1].homogeneous();
-    // Epipolar line in image 2 of keypoint i1: l2 = F12' x1.
-    const Vec3 line = F12.transpose() * x1;
-    const double line_norm2 = line.x() * line.x() + line.y() * line.y();
-    if (line_norm2 <= 0) continue;
-    int best_distance = kDescriptorLowThreshold + 1;
-    int best_index = -1;
-    for (size_t i2 = 0; i2 < kf2.size(); ++i2) {
-      if (kf2.mapPoint(i2)) continue;
-      const int distance = hammingDistance(d1, kf2.descriptors.ptr<uint8_t>(i2));
-      if (distance >= best_distance) continue;
-      const Vec2& p2 = kf2.points[i2];
-      const int level2 = kf2.keypoints[i2].octave;
-      if (epipole_valid && (p2 - epipole).squaredNorm() < 100 * pyramid.scale[level2]) continue;
-      const double d = line.x() * p2.x() + line.y() * p2.y() + line.z();
-      // Distance to the epipolar line within the chi-square 1-dof bound at kf2's keypoint scale.
-      if (d * d / line_norm2 >= 3.84 * pyramid.sigma2[level2]) continue;
-      best_distance = distance;
-      best_index = static_cast<int>(i2);
-    }
-    if (best_index < 0) continue;
-    // Keep one-to-one: the better claimant of a kf2 keypoint wins.
-    if (best_distance >= best_distance_2[best_index]) continue;
-    if (best_for_2[best_index] >= 0) match_of_1[best_for_2[best_index]] = -1;
-    best_for_2[best_index] = static_cast<int>(i1);
-    best_distance_2[best_index] = best_distance;
-    match_of_1[i1] = best_index;
-  }
-  for (size_t i1 = 0; i1 < kf1.size(); ++i1)
-    if (match_of_1[i1] >= 0)
-      rotation.add(static_cast<int>(i1), kf1.keypoints[i1].angle - kf2.keypoints[match_of_1[i1]].angle);
-  for (int i1 : rotation.inconsistent()) match_of_1[i1] = -1;
-
-  std::vector<std::pair<int, int>> matches;
-  for (size_t i1 = 0; i1 < kf1.size(); ++i1)
-    if (match_of_1[i1] >= 0) matches.emplace_back(static_cast<int>(i1), match_of_1[i1]);
-  return matches;
+std::vector<std::pair<int, int>> searchForTriangulation(const KeyFrame& kf1, const KeyFrame& kf2) {
+  std::vector<bool> matched1(kf1.size()), matched2(kf2.size());
+  for (size_t i = 0; i < kf1.size(); ++i) matched1[i] = kf1.mapPoint(i) != nullptr;
+  for (size_t i = 0; i < kf2.size(); ++i) matched2[i] = kf2.mapPoint(i) != nullptr;
+  const cv::Matx33d F21 =
+      fundamentalFromPoses(kf1.pose(), kf2.pose(), kf1.camera().Keigen(), kf2.camera().Keigen());
+  return searchForTriangulation(kf1.view(), kf2.view(), F21, kf1.pyramid().sigma2, matched1, matched2);
 }
 
 }  // namespace vslam

@@ -24,7 +24,11 @@ bool System::processFrame(int index, double timestamp, const cv::Mat& image, con
   Frame frame;
   {
     ScopedStage stage(&timer_, "extract");
-    frame = frame_builder_->build(next_frame_id_++, index, timestamp, image, depth_m);
+    // Monocular initialisation matches only the finest level: extract twice the
+    // features until the map exists, as ORB-SLAM does.
+    const bool initialising = tracking_->state() == TrackingState::NotInitialized;
+    const int n_features = initialising ? 2 * config_.orb.n_features : -1;
+    frame = frame_builder_->build(next_frame_id_++, index, timestamp, image, depth_m, n_features);
   }
   ScopedStage stage(&timer_, "track");
   return tracking_->track(frame);

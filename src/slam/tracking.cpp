@@ -110,30 +110,31 @@ void Tracking::initialise(Frame& frame) {
     return;
   }
   const Frame& reference = *init_reference_;
-  std::vector<int> matches_ref_cur;
-  const int n_matches = matchInWindow(reference.keypoints, reference.descriptors, frame.keypoints, frame.descriptors,
-                                      frame.grid, init_prev_matched_, kInitWindowPx, matches_ref_cur);
-  if (n_matches < kInitMinMatches) {
+  WindowMatchParams window;
+  window.window = static_cast<float>(kInitWindowPx);
+  const WindowMatches matched = matchInWindow(reference.view(), frame.view(), frame.grid, init_prev_matched_, window);
+  const std::vector<int>& matches_ref_cur = matched.matches12;
+  if (matched.count < kInitMinMatches) {
     // Too little overlap: start again from this frame.
     init_reference_ = std::make_unique<Frame>(frame);
     init_prev_matched_ = frame.points;
     return;
   }
-  for (size_t i = 0; i < matches_ref_cur.size(); ++i)
-    if (matches_ref_cur[i] >= 0) init_prev_matched_[i] = frame.points[matches_ref_cur[i]];
-
   std::vector<Vec2> pts_ref, pts_cur;
   std::vector<std::pair<int, int>> pairs;
   for (size_t i = 0; i < matches_ref_cur.size(); ++i) {
     if (matches_ref_cur[i] < 0) continue;
-    pts_ref.push_back(reference.points[i]);
-    pts_cur.push_back(frame.points[matches_ref_cur[i]]);
+    pts_ref.push_back(reference.point(i));
+    pts_cur.push_back(frame.point(matches_ref_cur[i]));
     pairs.emplace_back(static_cast<int>(i), matches_ref_cur[i]);
   }
   const TwoViewInitializer initializer(frame.camera->Keigen(), config_.initializer);
   const TwoViewResult result = initializer.initialize(pts_ref, pts_cur);
+  spdlog::debug("frame {}: init attempt with frame {}: {} matches, {} model inliers, {} triangulated, ratio {:.2f}, "
+                "parallax {:.2f} deg: {}",
+                frame.index, reference.index, matched.count, result.n_model_inliers, result.n_triangulated,
+                result.score_ratio, result.median_parallax_deg, result.success ? "ok" : result.failure_reason);
   if (!result.success) {
-    spdlog::debug("frame {}: initialisation failed: {}", frame.index, result.failure_reason);
     return;
   }
 
@@ -173,7 +174,7 @@ void Tracking::initialise(Frame& frame) {
     for (KeyFrame* kf : {kf_ref, kf_cur}) {
       const int idx = points[p]->keypointIn(kf);
       problem.observations.push_back(
-          {k, static_cast<int>(p), kf->points[idx], frame.pyramid->inv_sigma2[kf->keypoints[idx].octave]});
+          {k, static_cast<int>(p), kf->point(idx), frame.pyramid->inv_sigma2[kf->keypoints[idx].octave]});
       ++k;
     }
   }
@@ -241,7 +242,7 @@ int Tracking::optimisePose(Frame& frame) {
     MapPoint* point = frame.map_points[i];
     if (!point) continue;
     keypoint_of.push_back(static_cast<int>(i));
-    observations.push_back({static_cast<int>(points_w.size()), frame.points[i],
+    observations.push_back({static_cast<int>(points_w.size()), frame.point(i),
                             frame.pyramid->inv_sigma2[frame.keypoints[i].octave]});
     points_w.push_back(point->position());
   }

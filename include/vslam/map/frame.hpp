@@ -39,7 +39,7 @@ struct Frame {
   const ScalePyramid* pyramid = nullptr;
 
   std::vector<cv::KeyPoint> keypoints;  // as detected (distorted pixels)
-  std::vector<Vec2> points;             // undistorted pixels
+  std::vector<cv::Point2f> points;      // undistorted pixels
   cv::Mat descriptors;                  // N x 32, CV_8U
   std::vector<FeatureLabel> labels;     // one per keypoint
   std::vector<cv::Vec3b> colours;       // BGR at each keypoint
@@ -55,8 +55,11 @@ struct Frame {
   size_t size() const { return keypoints.size(); }
   int level(size_t i) const { return keypoints[i].octave; }
   Vec3 cameraCentre() const { return -(T_cw.R.transpose() * T_cw.t); }
-  // Prepares matching state after keypoints/points are filled.
-  void finalizeFeatures();
+  // Prepares matching state after keypoints/points are filled; `bounds` is
+  // the undistorted image's extent (undistortedImageBounds).
+  void finalizeFeatures(const cv::Rect2f& bounds);
+  FeatureView view() const { return {keypoints, points, descriptors}; }
+  Vec2 point(size_t i) const { return Vec2(points[i].x, points[i].y); }
   int trackedCount() const;  // matched, non-outlier keypoints
 };
 

@@ -30,12 +30,14 @@ class KeyFrame {
   const ScalePyramid& pyramid() const { return *pyramid_; }
   size_t size() const { return keypoints.size(); }
   std::vector<cv::KeyPoint> keypoints;
-  std::vector<Vec2> points;
+  std::vector<cv::Point2f> points;  // undistorted
   cv::Mat descriptors;
   std::vector<FeatureLabel> labels;
   std::vector<cv::Vec3b> colours;
   std::vector<float> depth;
   FeatureGrid grid;
+  FeatureView view() const { return {keypoints, points, descriptors}; }
+  Vec2 point(size_t i) const { return Vec2(points[i].x, points[i].y); }
 
   // Map point associations, one slot per keypoint.
   MapPoint* mapPoint(size_t i) const { return map_points_[i]; }

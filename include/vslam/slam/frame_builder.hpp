@@ -15,8 +15,10 @@ class FrameBuilder {
  public:
   FrameBuilder(const Config& config, const PinholeCamera& camera);
 
-  // `bgr` is the colour image (or grey, CV_8UC1); `depth_m` is CV_32F metres or empty.
-  Frame build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m = cv::Mat()) const;
+  // `bgr` is the colour image (or grey, CV_8UC1); `depth_m` is CV_32F metres or
+  // empty; `n_features` < 0 means the configured number.
+  Frame build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m = cv::Mat(),
+              int n_features = -1) const;
 
   const ScalePyramid& pyramid() const { return pyramid_; }
   const PinholeCamera& camera() const { return camera_; }
@@ -27,6 +29,7 @@ class FrameBuilder {
   PinholeCamera camera_;
   OrbExtractor extractor_;
   ScalePyramid pyramid_;
+  cv::Rect2f undistorted_bounds_;
 };
 
 }  // namespace vslam

@@ -38,9 +38,9 @@ int searchByDescriptor(const KeyFrame& keyframe, const Frame& frame, std::vector
                        double ratio = 0.7);
 
 // Pairs of keypoints (index in kf1, index in kf2), both without a map point,
-// whose descriptors agree and which satisfy the epipolar constraint of F12
-// (x1' F12 x2 = 0); candidates for triangulating new map points.
-std::vector<std::pair<int, int>> searchForTriangulation(const KeyFrame& kf1, const KeyFrame& kf2, const Mat3& F12);
+// whose descriptors agree and which satisfy the epipolar constraint of the two
+// keyframes' poses; candidates for triangulating new map points.
+std::vector<std::pair<int, int>> searchForTriangulation(const KeyFrame& kf1, const KeyFrame& kf2);
 
 // Projects `points` into `keyframe` and fuses each with the keyframe's
 // matching keypoint: adds an observation, or merges with the point already

@@ -61,7 +61,7 @@ class Tracking {
 
   TrackingState state_ = TrackingState::NotInitialized;
   std::unique_ptr<Frame> init_reference_;   // first frame of a two-view initialisation attempt
-  std::vector<Vec2> init_prev_matched_;
+  std::vector<cv::Point2f> init_prev_matched_;
   std::optional<Frame> last_frame_;
   std::optional<SE3> velocity_;  // T_cur_last
   KeyFrame* reference_keyframe_ = nullptr;

@@ -97,8 +97,15 @@ ModelFiles locateModel(const DetectorParams& params) {
   };
   files.cfg = resolve(params.cfg, "--detector-cfg", known != knownModels().end() ? known->cfg_file : "");
   files.weights = resolve(params.weights, "--detector-weights", known != knownModels().end() ? known->weights_file : "");
-  // A custom model without a names file gets COCO's: every model here is COCO-trained.
-  files.names = resolve(params.names, "--detector-names", known != knownModels().end() ? known->names_file : "coco.names");
+  // Class names: the file beside the cfg first (it belongs to that model),
+  // then the search. A custom model without one gets COCO's: every model here is COCO-trained.
+  const std::string names_file = known != knownModels().end() ? known->names_file : "coco.names";
+  const fs::path beside_cfg = fs::path(files.cfg).parent_path() / names_file;
+  std::error_code error;
+  if (params.names.empty() && fs::is_regular_file(beside_cfg, error))
+    files.names = beside_cfg.string();
+  else
+    files.names = resolve(params.names, "--detector-names", names_file);
   if (known == knownModels().end()) files.name = "custom";
   return files;
 }

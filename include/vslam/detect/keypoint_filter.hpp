@@ -64,4 +64,10 @@ KeypointFilterStats applyKeypointFilter(const cv::Size& image_size, const std::v
 // outlive the returned function.
 BoxExtractor orbBoxExtractor(const OrbExtractor& extractor, const ImagePyramid& pyramid, int features_per_box);
 
+// Features to ask for in each box: DetectorParams::box_features, or the
+// frame's OrbParams::n_features when that is 0.
+inline int featuresPerBox(const DetectorParams& detector, const OrbParams& orb) {
+  return detector.box_features > 0 ? detector.box_features : orb.n_features;
+}
+
 }  // namespace vslam

@@ -6,7 +6,8 @@
 //   roots, in order: $VSLAM_MODELS (when set), ./models, ../shared/models, then
 //   the same two folders beside the source tree (so build/vslam finds them too);
 //   in each root: the root itself, then its immediate subfolders in name order.
-// The first existing file wins. Explicit paths (DetectorParams::cfg, weights,
+// The first existing file wins, except that a class-names file beside the
+// cfg found is preferred (it belongs to that model). Explicit paths (DetectorParams::cfg, weights,
 // names, i.e. --detector-cfg/--detector-weights/--detector-names) bypass the
 // search and must exist.
 #include <string>

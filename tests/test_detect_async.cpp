@@ -12,7 +12,9 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "test_support.hpp"
+#include "vslam/core/error.hpp"
 #include "vslam/detect/async_detector.hpp"
+#include "vslam/detect/detection_stage.hpp"
 
 namespace vslam {
 namespace {
@@ -117,6 +119,34 @@ TEST(AsyncDetector, RealDetectorAheadOfTheCaller) {
     for (const Detection& d : async.wait(static_cast<int>(i))) chairs += d.class_name == "chair" ? 1 : 0;
   }
   EXPECT_GE(chairs, 4);
+}
+
+TEST(DetectionStage, NoneGivesNoStage) {
+  DetectorParams params;
+  params.model = "none";
+  EXPECT_EQ(makeDetectionStage(params), nullptr);
+}
+
+TEST(DetectionStage, ResolvesDynamicClassesAndDetectsAhead) {
+  DetectorParams params;
+  params.dynamic_classes = {"person", "chair"};
+  const auto stage = makeDetectionStage(params);
+  ASSERT_NE(stage, nullptr);
+  EXPECT_EQ(stage->dynamicClassIds(), (std::vector<int>{0, 56}));
+  EXPECT_EQ(stage->classNames().size(), 80u);
+  const cv::Mat dog = cv::imread((test::sharedData() / "images/dog.jpg").string());
+  stage->submit(0, dog);
+  stage->submit(1, dog);
+  EXPECT_EQ(stage->wait(0).size(), 3u);
+  EXPECT_EQ(stage->wait(1).size(), 3u);
+
+  params.dynamic_classes = {"pedestrian"};
+  try {
+    DetectionStage bad(params);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("pedestrian"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

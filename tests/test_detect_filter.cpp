@@ -1,12 +1,15 @@
 // The keypoint filter (the paper's Algorithm 1) rule by rule, with a fake box
 // extractor on synthetic inputs, then once with the real OrbExtractor.
 #include <algorithm>
+#include <fstream>
+#include <functional>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "test_support.hpp"
+#include "vslam/core/config.hpp"
 #include "vslam/detect/keypoint_filter.hpp"
 
 namespace vslam {
@@ -257,6 +260,19 @@ TEST(KeypointFilter, RealOrbExtractorAddsKeypointsInsideTheBox) {
   for (size_t i = frame_count; i < keypoints.size(); ++i)
     for (size_t j = 0; j < i; ++j)
       ASSERT_FALSE(keypoints[i].pt == keypoints[j].pt && keypoints[i].octave == keypoints[j].octave) << i << " " << j;
+}
+
+TEST(KeypointFilter, FeaturesPerBoxComeFromTheConfig) {
+  const auto path = test::scratchDir("filter_config") / "cam.yaml";
+  std::ofstream(path) << "camera: {width: 640, height: 480, fx: 500, fy: 500, cx: 320, cy: 240}\n"
+                         "orb: {n_features: 1200}\n"
+                         "detector: {box_features: 150, min_box_px: 48}\n";
+  Config config = loadConfig(path.string());
+  EXPECT_EQ(config.detector.box_features, 150);
+  EXPECT_EQ(config.detector.min_box_px, 48);
+  EXPECT_EQ(featuresPerBox(config.detector, config.orb), 150);
+  config.detector.box_features = 0;
+  EXPECT_EQ(featuresPerBox(config.detector, config.orb), 1200);  // the paper: the frame's own count
 }
 
 }  // namespace

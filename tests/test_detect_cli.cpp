@@ -95,6 +95,27 @@ TEST(DetectCommand, FolderInputAndOutputNames) {
     for (const auto& detection : image["detections"]) EXPECT_GE(detection["confidence"].get<double>(), 0.5);
 }
 
+TEST(DetectCommand, FilterKeypointsReportsWhatAlgorithm1Did) {
+  const fs::path scratch = test::scratchDir("detect_cli_filter");
+  const std::string dog = (test::sharedData() / "images/dog.jpg").string();
+  RunResult run = runVslam("detect --images " + dog + " --filter-keypoints --out " + (scratch / "a").string(), scratch);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  std::ifstream plain_file(scratch / "a/detections.json");
+  const nlohmann::json plain = nlohmann::json::parse(plain_file)["images"][0]["keypoint_filter"];
+  EXPECT_EQ(plain["boxes_used"], 3);  // dog, bicycle and car are all over 64 px
+  EXPECT_GT(plain["frame_keypoints"].get<int>(), 100);
+  EXPECT_GT(plain["keypoints_added"].get<int>(), 100);
+  EXPECT_EQ(plain["keypoints_removed_dynamic"], 0);
+
+  run = runVslam("detect --images " + dog + " --filter-keypoints --dynamic-classes dog --out " + (scratch / "b").string(),
+                 scratch);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  std::ifstream dynamic_file(scratch / "b/detections.json");
+  const nlohmann::json dynamic = nlohmann::json::parse(dynamic_file)["images"][0]["keypoint_filter"];
+  EXPECT_EQ(dynamic["boxes_used"], 2);
+  EXPECT_GT(dynamic["keypoints_removed_dynamic"].get<int>(), 10);
+}
+
 TEST(DetectCommand, CudaTargetWithoutCudaIsAClearError) {
   bool has_cuda = false;
   for (const auto& [backend, target] : cv::dnn::getAvailableBackends())

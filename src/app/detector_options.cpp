@@ -13,6 +13,8 @@ void addDetectorOptions(CLI::App& command, DetectorOptions& options) {
   command.add_option("--conf", options.confidence, "Confidence threshold in [0, 1]");
   command.add_option("--nms", options.nms, "Non-maximum suppression IoU threshold in [0, 1]");
   command.add_option("--min-box-px", options.min_box_px, "Skip boxes narrower or lower than this (paper: 64)");
+  command.add_option("--box-features", options.box_features,
+                     "ORB features asked for inside each box (default 0: the frame's n_features, as in the paper)");
   command.add_option("--dnn-target", options.dnn_target, "cpu (default), opencl or cuda, where OpenCV supports it");
   command.add_option("--dynamic-classes", options.dynamic_classes,
                      "Comma-separated classes whose keypoints are removed, e.g. person,car")
@@ -28,6 +30,7 @@ void applyDetectorOptions(const DetectorOptions& options, DetectorParams& params
   if (options.confidence) params.confidence_threshold = *options.confidence;
   if (options.nms) params.nms_threshold = *options.nms;
   if (options.min_box_px) params.min_box_px = *options.min_box_px;
+  if (options.box_features) params.box_features = *options.box_features;
   if (options.dnn_target) params.dnn_target = *options.dnn_target;
   if (options.dynamic_classes) params.dynamic_classes = *options.dynamic_classes;
 }

@@ -18,6 +18,7 @@ struct DetectorOptions {
   std::optional<int> input_size;
   std::optional<double> confidence, nms;
   std::optional<int> min_box_px;
+  std::optional<int> box_features;
   std::optional<std::string> dnn_target;
   std::optional<std::vector<std::string>> dynamic_classes;
 };

@@ -5,6 +5,8 @@
 #include <fstream>
 #include <map>
 
+#include <opencv2/imgproc.hpp>
+
 #include "vslam/core/error.hpp"
 #include "vslam/detect/darknet_weights.hpp"
 
@@ -98,9 +100,13 @@ YoloDetector::YoloDetector(const DetectorParams& params, const ModelFiles& files
 
 std::vector<Detection> YoloDetector::detect(const cv::Mat& bgr) {
   const auto start = std::chrono::steady_clock::now();
-  CV_Assert(!bgr.empty() && bgr.type() == CV_8UC3);
+  CV_Assert(!bgr.empty() && bgr.depth() == CV_8U);
+  // Grey sequences (KITTI's image_0) go through the colour network as grey BGR.
+  cv::Mat colour = bgr;
+  if (bgr.channels() == 1) cv::cvtColor(bgr, colour, cv::COLOR_GRAY2BGR);
+  if (bgr.channels() == 4) cv::cvtColor(bgr, colour, cv::COLOR_BGRA2BGR);
   const cv::Size input(params_.input_size, params_.input_size);
-  const cv::Mat blob = cv::dnn::blobFromImage(bgr, 1.0 / 255.0, input, cv::Scalar(), /*swapRB=*/true, /*crop=*/false);
+  const cv::Mat blob = cv::dnn::blobFromImage(colour, 1.0 / 255.0, input, cv::Scalar(), /*swapRB=*/true, /*crop=*/false);
   net_.setInput(blob);
   net_.forward(outputs_, output_names_);
 

@@ -29,6 +29,7 @@ class YoloDetector {
   YoloDetector(const DetectorParams& params, const ModelFiles& files);
 
   // Detections at or above params.confidence_threshold after per-class NMS.
+  // Takes 8-bit BGR; grey and BGRA images are converted first.
   std::vector<Detection> detect(const cv::Mat& bgr);
 
   const std::vector<std::string>& classNames() const { return class_names_; }

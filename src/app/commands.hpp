@@ -16,5 +16,6 @@ struct Command {
 Command addRunCommand(CLI::App& app);
 Command addEvalCommand(CLI::App& app);
 Command addRenderCommand(CLI::App& app);
+Command addDetectCommand(CLI::App& app);
 
 }  // namespace vslam::app

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
       vslam::app::addRunCommand(app),
       vslam::app::addEvalCommand(app),
       vslam::app::addRenderCommand(app),
+      vslam::app::addDetectCommand(app),
   };
 
   try {

@@ -146,6 +146,7 @@ Config loadVslamYaml(const std::string& path) {
   reader.optional(det, "detector", "confidence_threshold", d.confidence_threshold);
   reader.optional(det, "detector", "nms_threshold", d.nms_threshold);
   reader.optional(det, "detector", "min_box_px", d.min_box_px);
+  reader.optional(det, "detector", "box_features", d.box_features);
   reader.optional(det, "detector", "dnn_target", d.dnn_target);
   reader.optional(det, "detector", "dynamic_classes", d.dynamic_classes);
   return config;

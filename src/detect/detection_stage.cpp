@@ -1,0 +1,19 @@
+#include "vslam/detect/detection_stage.hpp"
+
+#include "vslam/detect/model_locator.hpp"
+
+namespace vslam {
+
+DetectionStage::DetectionStage(const DetectorParams& params)
+    : params_(params), detector_(std::make_unique<YoloDetector>(params, locateModel(params))) {
+  dynamic_class_ids_ = classIdsOf(params_.dynamic_classes, detector_->classNames(), detector_->files().names);
+  YoloDetector* detector = detector_.get();
+  async_ = std::make_unique<AsyncDetector>([detector](const cv::Mat& bgr) { return detector->detect(bgr); });
+}
+
+std::unique_ptr<DetectionStage> makeDetectionStage(const DetectorParams& params) {
+  if (params.model == "none") return nullptr;
+  return std::make_unique<DetectionStage>(params);
+}
+
+}  // namespace vslam

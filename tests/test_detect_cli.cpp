@@ -1,0 +1,149 @@
+// `vslam detect` end to end, through the real executable.
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/dnn.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "test_support.hpp"
+
+namespace vslam {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+RunResult runVslam(const std::string& arguments, const fs::path& scratch) {
+  const fs::path log = scratch / "output.txt";
+  const std::string command = std::string(VSLAM_BINARY_DIR) + "/vslam " + arguments + " > " + log.string() + " 2>&1";
+  const int status = std::system(command.c_str());
+  RunResult result;
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(log);
+  std::stringstream text;
+  text << in.rdbuf();
+  result.output = text.str();
+  return result;
+}
+
+TEST(DetectCommand, WritesJsonAndAnnotatedPngForDogImage) {
+  const fs::path scratch = test::scratchDir("detect_cli_dog");
+  const fs::path dog = test::sharedData() / "images/dog.jpg";
+  const fs::path out = scratch / "out";
+  const RunResult run = runVslam("detect --images " + dog.string() + " --out " + out.string(), scratch);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("dog.jpg: 3 detections"), std::string::npos) << run.output;
+
+  std::ifstream json_file(out / "detections.json");
+  ASSERT_TRUE(json_file) << run.output;
+  const nlohmann::json report = nlohmann::json::parse(json_file);
+  EXPECT_EQ(report["model"], "yolo-fastest-1.1-xl");
+  ASSERT_EQ(report["images"].size(), 1u);
+  const nlohmann::json& image = report["images"][0];
+  EXPECT_EQ(image["file"], dog.string());
+  EXPECT_EQ(image["width"], 768);
+  EXPECT_EQ(image["height"], 576);
+  EXPECT_GT(image["ms"].get<double>(), 0.0);
+  std::set<std::string> classes;
+  for (const auto& detection : image["detections"]) {
+    classes.insert(detection["class"].get<std::string>());
+    EXPECT_EQ(detection["box"].size(), 4u);
+    EXPECT_GE(detection["confidence"].get<double>(), 0.4);
+    EXPECT_GE(detection["class_id"].get<int>(), 0);
+  }
+  EXPECT_EQ(classes, (std::set<std::string>{"dog", "bicycle", "car"}));
+
+  const cv::Mat original = cv::imread(dog.string());
+  const cv::Mat annotated = cv::imread((out / "dog_det.png").string());
+  ASSERT_FALSE(annotated.empty());
+  ASSERT_EQ(annotated.size(), original.size());
+  cv::Mat changed;
+  cv::absdiff(annotated, original, changed);
+  changed = changed.reshape(1);
+  // Boxes and labels change thousands of pixels; the rest is untouched.
+  const int changed_pixels = cv::countNonZero(changed > 40);
+  EXPECT_GT(changed_pixels, 3000);
+  EXPECT_LT(changed_pixels, static_cast<int>(original.total()) / 4);
+}
+
+TEST(DetectCommand, FolderInputAndOutputNames) {
+  const fs::path scratch = test::scratchDir("detect_cli_folder");
+  const fs::path out = scratch / "out";
+  const RunResult run = runVslam("detect --images " + (test::sharedData() / "images").string() + " --out " +
+                                     out.string() + " --input-size 416 --conf 0.5",
+                                 scratch);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  for (const char* name : {"dog_det.png", "person_det.png", "horses_det.png", "detections.json"})
+    EXPECT_TRUE(fs::exists(out / name)) << name << "\n" << run.output;
+  std::ifstream json_file(out / "detections.json");
+  const nlohmann::json report = nlohmann::json::parse(json_file);
+  EXPECT_EQ(report["input_size"], 416);
+  EXPECT_EQ(report["images"].size(), 3u);
+  for (const auto& image : report["images"])
+    for (const auto& detection : image["detections"]) EXPECT_GE(detection["confidence"].get<double>(), 0.5);
+}
+
+TEST(DetectCommand, FilterKeypointsReportsWhatAlgorithm1Did) {
+  const fs::path scratch = test::scratchDir("detect_cli_filter");
+  const std::string dog = (test::sharedData() / "images/dog.jpg").string();
+  RunResult run = runVslam("detect --images " + dog + " --filter-keypoints --out " + (scratch / "a").string(), scratch);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  std::ifstream plain_file(scratch / "a/detections.json");
+  const nlohmann::json plain = nlohmann::json::parse(plain_file)["images"][0]["keypoint_filter"];
+  EXPECT_EQ(plain["boxes_used"], 3);  // dog, bicycle and car are all over 64 px
+  EXPECT_GT(plain["frame_keypoints"].get<int>(), 100);
+  EXPECT_GT(plain["keypoints_added"].get<int>(), 100);
+  EXPECT_EQ(plain["keypoints_removed_dynamic"], 0);
+
+  run = runVslam("detect --images " + dog + " --filter-keypoints --dynamic-classes dog --out " + (scratch / "b").string(),
+                 scratch);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  std::ifstream dynamic_file(scratch / "b/detections.json");
+  const nlohmann::json dynamic = nlohmann::json::parse(dynamic_file)["images"][0]["keypoint_filter"];
+  EXPECT_EQ(dynamic["boxes_used"], 2);
+  EXPECT_GT(dynamic["keypoints_removed_dynamic"].get<int>(), 10);
+}
+
+TEST(DetectCommand, CudaTargetWithoutCudaIsAClearError) {
+  bool has_cuda = false;
+  for (const auto& [backend, target] : cv::dnn::getAvailableBackends())
+    has_cuda = has_cuda || backend == cv::dnn::DNN_BACKEND_CUDA;
+  if (has_cuda) GTEST_SKIP() << "this OpenCV build has CUDA";
+  const fs::path scratch = test::scratchDir("detect_cli_cuda");
+  const RunResult run = runVslam("detect --images " + (test::sharedData() / "images/dog.jpg").string() + " --out " +
+                                     (scratch / "out").string() + " --dnn-target cuda",
+                                 scratch);
+  EXPECT_EQ(run.exit_code, 2) << run.output;
+  EXPECT_NE(run.output.find("this OpenCV build has no CUDA backend; use --dnn-target cpu"), std::string::npos)
+      << run.output;
+}
+
+TEST(DetectCommand, BadInputsAreOneLineErrors) {
+  const fs::path scratch = test::scratchDir("detect_cli_errors");
+  RunResult run = runVslam("detect --images /nonexistent/photo.jpg --out " + (scratch / "out").string(), scratch);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.output, "error: /nonexistent/photo.jpg: no such image or folder\n");
+
+  run = runVslam("detect --images " + (test::sharedData() / "images/dog.jpg").string() + " --detector yolov9", scratch);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("unknown detector model 'yolov9'"), std::string::npos) << run.output;
+
+  run = runVslam("detect --images " + (test::sharedData() / "images/dog.jpg").string() + " --input-size 300", scratch);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.output.find("multiple of 32"), std::string::npos) << run.output;
+}
+
+}  // namespace
+}  // namespace vslam

@@ -15,5 +15,6 @@ struct Command {
 
 Command addRunCommand(CLI::App& app);
 Command addEvalCommand(CLI::App& app);
+Command addVocabCommand(CLI::App& app);
 
 }  // namespace vslam::app

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   std::vector<vslam::app::Command> commands = {
       vslam::app::addRunCommand(app),
       vslam::app::addEvalCommand(app),
+      vslam::app::addVocabCommand(app),
   };
 
   try {

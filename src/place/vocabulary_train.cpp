@@ -245,6 +245,7 @@ Vocabulary Vocabulary::train(const std::vector<cv::Mat>& descriptors_per_image, 
   vocabulary.max_kmeans_iterations_ = params.max_kmeans_iterations;
 
   ProgressReporter reporter(progress);
+  reporter.report(0.0);
   DeterministicRandom random(params.seed);
 
   // Breadth-first: a node's children get consecutive ids when it is split, and

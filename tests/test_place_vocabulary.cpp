@@ -1,4 +1,4 @@
-#include <chrono>
+#include <ctime>
 #include <fstream>
 #include <iterator>
 #include <random>
@@ -333,18 +333,20 @@ TEST(PlaceVocabulary, KeyframeToBagOfWordsTakesAtMostThreeMilliseconds) {
   const Vocabulary vocabulary = Vocabulary::train(test::teddyDescriptors(frames), VocabularyParams{10, 5, 42, 3});
   const cv::Mat keyframe = tiny().held_out[1];
   ASSERT_GE(keyframe.rows, 900);
+  // CPU time, not wall time: the build machines are shared, and a busy
+  // neighbour must not fail this test. 21 runs of 5 transforms each.
   std::vector<double> milliseconds;
   for (int run = 0; run < 21; ++run) {
     BowVector bow;
     FeatureVector features;
-    const auto start = std::chrono::steady_clock::now();
-    vocabulary.transform(keyframe, bow, features, 4);
-    milliseconds.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    const std::clock_t start = std::clock();
+    for (int repeat = 0; repeat < 5; ++repeat) vocabulary.transform(keyframe, bow, features, 4);
+    milliseconds.push_back(1000.0 * static_cast<double>(std::clock() - start) / CLOCKS_PER_SEC / 5);
   }
   std::nth_element(milliseconds.begin(), milliseconds.begin() + 10, milliseconds.end());
-  RecordProperty("median_ms", std::to_string(milliseconds[10]));
+  RecordProperty("median_cpu_ms", std::to_string(milliseconds[10]));
   std::cout << "transform of " << keyframe.rows << " descriptors, k=10 L=5 (" << vocabulary.wordCount()
-            << " words): median " << milliseconds[10] << " ms\n";
+            << " words): median " << milliseconds[10] << " ms CPU\n";
 #ifdef NDEBUG
   EXPECT_LE(milliseconds[10], 3.0);
 #endif

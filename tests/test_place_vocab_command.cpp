@@ -64,6 +64,18 @@ TEST(PlaceVocabCommand, BuildIsReproducibleAndSkipsDepth) {
   ASSERT_EQ(runVslam("vocab info " + (out / "b.vsv").string(), out), 0);
   EXPECT_NE(readAll(out / "stdout.txt").find("words: " + std::to_string(vocabulary.wordCount()) + "\n"),
             std::string::npos);
+
+  // To DBoW2 text and back: the same file but for seed and iterations, which text does not carry.
+  ASSERT_EQ(runVslam("vocab convert " + (out / "b.vsv").string() + " " + (out / "b.txt").string() +
+                         " --format dbow2-text",
+                     out),
+            0);
+  EXPECT_EQ(readAll(out / "b.txt").rfind("4 2 0 0\n", 0), 0u);
+  ASSERT_EQ(runVslam("vocab convert " + (out / "b.txt").string() + " " + (out / "c.vsv").string(), out), 0);
+  std::string back = readAll(out / "c.vsv");
+  ASSERT_EQ(back.size(), first.size());
+  EXPECT_EQ(back.substr(0, 20), first.substr(0, 20));
+  EXPECT_EQ(back.substr(28), first.substr(28));  // bytes 20..27: seed and k-means iterations
 }
 
 TEST(PlaceVocabCommand, BadInputsAreOneLineErrors) {

@@ -1,5 +1,6 @@
 // `vslam vocab build`: trains a place-recognition vocabulary on images.
 // `vslam vocab info`: describes a vocabulary file (ours or DBoW2 text).
+// `vslam vocab convert`: rewrites one in the other format.
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -155,6 +156,22 @@ int runInfo(const std::string& path) {
   return 0;
 }
 
+int runConvert(const std::string& in, const std::string& out, const std::string& format) {
+  const auto start = std::chrono::steady_clock::now();
+  const Vocabulary vocabulary = Vocabulary::load(in);
+  const double load_seconds = secondsSince(start);
+  const fs::path out_path(out);
+  if (out_path.has_parent_path()) fs::create_directories(out_path.parent_path());
+  if (format == "dbow2-text")
+    vocabulary.saveDbow2Text(out);
+  else
+    vocabulary.save(out);
+  std::printf("words: %zu\n", vocabulary.wordCount());
+  std::printf("file: %s (%s, %ju bytes)\n", out.c_str(), format.c_str(), static_cast<uintmax_t>(fs::file_size(out)));
+  std::printf("seconds: %.1f (load %.1f)\n", secondsSince(start), load_seconds);
+  return 0;
+}
+
 }  // namespace
 
 Command addVocabCommand(CLI::App& app) {
@@ -190,9 +207,22 @@ Command addVocabCommand(CLI::App& app) {
   CLI::App* info = vocab->add_subcommand("info", "Describe a vocabulary file (vslam binary or DBoW2 text)");
   info->add_option("path", *info_path, "Vocabulary file")->required();
 
-  command.run = [build, info, options, info_path] {
+  struct ConvertOptions {
+    std::string in, out, format = "binary";
+  };
+  auto convert_options = std::make_shared<ConvertOptions>();
+  CLI::App* convert = vocab->add_subcommand(
+      "convert", "Rewrite a vocabulary: DBoW2 text (ORBvoc.txt) to our binary form, which loads much faster, or back");
+  convert->add_option("in", convert_options->in, "Vocabulary file (vslam binary or DBoW2 text)")->required();
+  convert->add_option("out", convert_options->out, "Output file")->required();
+  convert->add_option("--format", convert_options->format, "Output format")
+      ->check(CLI::IsMember({"binary", "dbow2-text"}))
+      ->capture_default_str();
+
+  command.run = [build, info, convert, options, info_path, convert_options] {
     if (build->parsed()) return runBuild(*options);
     if (info->parsed()) return runInfo(*info_path);
+    if (convert->parsed()) return runConvert(convert_options->in, convert_options->out, convert_options->format);
     return 2;
   };
   return command;

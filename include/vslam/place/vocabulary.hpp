@@ -11,6 +11,9 @@
 //
 // Files: `save` writes our compact little-endian binary form; `load` reads it
 // or DBoW2's text format (ORB-SLAM's ORBvoc.txt), told apart by content.
+//
+// A Vocabulary does not change after train/load: its const members may be
+// called from several threads at once (Tracking, Local Mapping, Loop Closing).
 #include <cstdint>
 #include <functional>
 #include <map>

@@ -10,13 +10,16 @@
 //   f64      idf[word_count]              IEEE-754 binary64; words = leaves in node order
 // The tree shape follows from the child counts alone: the children of node n
 // are the child_count[n] nodes after those of node n - 1.
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstring>
-#include <deque>
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "vslam/core/error.hpp"
 #include "vslam/place/vocabulary.hpp"
@@ -88,6 +91,7 @@ bool parseReal(std::string_view field, double& value) {
 // ---------------------------------------------------------------- binary
 
 void Vocabulary::save(const std::string& path) const {
+  if (empty()) throw std::logic_error("Vocabulary::save: the vocabulary is empty");
   std::string bytes;
   bytes.reserve(kHeaderBytes + nodeCount() * (2 + kDescriptorBytes) + wordCount() * 8);
   bytes.append(kMagic, sizeof(kMagic));
@@ -211,6 +215,7 @@ Vocabulary Vocabulary::loadBinary(const std::string& path, const std::string& by
 // ---------------------------------------------------------------- DBoW2 text
 
 void Vocabulary::saveDbow2Text(const std::string& path) const {
+  if (empty()) throw std::logic_error("Vocabulary::saveDbow2Text: the vocabulary is empty");
   std::vector<NodeId> parent(nodeCount(), 0);
   for (NodeId n = 0; n < nodeCount(); ++n)
     for (uint32_t c = 0; c < child_count_[n]; ++c) parent[first_child_[n] + c] = n;

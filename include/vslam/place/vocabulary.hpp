@@ -77,7 +77,11 @@ class Vocabulary {
   BowVector transform(const cv::Mat& descriptors) const;
 
   // Word of one descriptor (32 bytes): greedy descent, closest child by
-  // Hamming distance at each level, the lowest child index on ties.
+  // Hamming distance at each level, the lowest child index on ties; kNoWord
+  // for an empty vocabulary. Word ids are 0 .. wordCount() - 1: the leaves
+  // numbered breadth-first, whatever file the vocabulary came from (so an
+  // ORBvoc.txt's word ids differ from ORB-SLAM's own numbering; bags and
+  // scores are the same up to that renaming).
   WordId wordOf(const uint8_t* descriptor) const;
 
   // The L1 score; see l1Score.
@@ -85,7 +89,7 @@ class Vocabulary {
 
   // Compact binary form, little-endian on every host; see
   // docs/PLACE_RECOGNITION.md for the layout. Throws InputError when the file
-  // cannot be written.
+  // cannot be written, std::logic_error for an empty vocabulary.
   void save(const std::string& path) const;
 
   // DBoW2's text format, readable by ORB-SLAM2/3 (ORBvoc.txt) and by `load`:
@@ -111,9 +115,6 @@ class Vocabulary {
  private:
   static constexpr int kWordsPerDescriptor = 4;  // 32 bytes as four 64-bit words
 
-  // Word ids are the leaves numbered in breadth-first node order, whatever
-  // file the vocabulary came from (so a DBoW2 file's word ids may differ from
-  // ORB-SLAM's own numbering; bags and scores are the same up to that renaming).
   // Node `n` has children first_child_[n] .. first_child_[n] + child_count_[n] - 1
   // (nodes are numbered breadth-first, so siblings are contiguous and so are
   // their descriptors). Node 0 is the root and has no descriptor of its own.

@@ -17,5 +17,6 @@ Command addRunCommand(CLI::App& app);
 Command addEvalCommand(CLI::App& app);
 Command addRenderCommand(CLI::App& app);
 Command addDetectCommand(CLI::App& app);
+Command addVocabCommand(CLI::App& app);
 
 }  // namespace vslam::app

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
       vslam::app::addEvalCommand(app),
       vslam::app::addRenderCommand(app),
       vslam::app::addDetectCommand(app),
+      vslam::app::addVocabCommand(app),
   };
 
   try {

@@ -237,12 +237,28 @@ TEST(OrbExtractor, FallbackThresholdFillsLowContrastCells) {
   EXPECT_GE(with_fallback.keypoints.size(), 950u);
 }
 
+TEST(OrbExtractor, TinyAndEmptyImagesGiveNoKeypoints) {
+  const OrbExtractor extractor{OrbParams()};
+  for (const cv::Size size : {cv::Size(3, 2), cv::Size(40, 30)}) {
+    std::vector<cv::KeyPoint> keypoints;
+    cv::Mat descriptors;
+    extractor.extract(cv::Mat(size, CV_8U, cv::Scalar(0)), keypoints, descriptors);
+    EXPECT_TRUE(keypoints.empty());
+    EXPECT_EQ(descriptors.rows, 0);
+  }
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;
+  extractor.extract(ImagePyramid(), keypoints, descriptors);
+  EXPECT_TRUE(keypoints.empty());
+}
+
 TEST(OrbExtractor, AcceptsColourAndRejectsOtherTypes) {
   const OrbExtractor extractor{OrbParams()};
   cv::Mat colour(120, 160, CV_8UC3, cv::Scalar(10, 20, 30));
   EXPECT_EQ(extractor.buildPyramid(colour).levels[0].type(), CV_8UC1);
   cv::Mat floating(120, 160, CV_32F, cv::Scalar(0));
   EXPECT_THROW(extractor.buildPyramid(floating), InputError);
+  EXPECT_THROW(extractor.buildPyramid(cv::Mat()), InputError);
 }
 
 }  // namespace

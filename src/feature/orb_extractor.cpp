@@ -293,6 +293,7 @@ std::vector<int> OrbExtractor::levelQuotas(int n_features) const {
 }
 
 ImagePyramid OrbExtractor::buildPyramid(const cv::Mat& image) const {
+  if (image.empty()) throw InputError("OrbExtractor::buildPyramid: empty image");
   cv::Mat gray;
   if (image.type() == CV_8UC1)
     gray = image;
@@ -308,8 +309,8 @@ ImagePyramid OrbExtractor::buildPyramid(const cv::Mat& image) const {
   pyramid.levels[0] = gray;
   for (int l = 1; l < params_.n_levels; ++l) {
     // Each level from the previous one (cheaper than from level 0; sizes from level 0 so they do not drift).
-    const cv::Size size(static_cast<int>(std::lround(gray.cols / scale_factors_[l])),
-                        static_cast<int>(std::lround(gray.rows / scale_factors_[l])));
+    const cv::Size size(std::max(1, static_cast<int>(std::lround(gray.cols / scale_factors_[l]))),
+                        std::max(1, static_cast<int>(std::lround(gray.rows / scale_factors_[l]))));
     cv::resize(pyramid.levels[l - 1], pyramid.levels[l], size, 0, 0, cv::INTER_LINEAR);
   }
   for (int l = 0; l < params_.n_levels; ++l)

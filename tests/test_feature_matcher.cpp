@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <limits>
 #include <numeric>
 #include <random>
 #include <set>
@@ -155,6 +156,10 @@ TEST(FeatureGrid, EmptyAndDegenerateInputs) {
   EXPECT_EQ(one.featuresInArea(10, 10, 0).size(), 1u);
   EXPECT_TRUE(one.featuresInArea(10, 10, 5, 1).empty());  // level 0 < min_level 1
   EXPECT_THROW(FeatureGrid({cv::Point2f(1, 1)}, {0, 1}, cv::Rect2f(0, 0, 10, 10)), InputError);
+  // A point that failed to undistort (NaN) is stored but never found.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const FeatureGrid with_nan({cv::Point2f(nan, nan), cv::Point2f(5, 5)}, {}, cv::Rect2f(0, 0, 640, 480));
+  EXPECT_EQ(with_nan.featuresInArea(5, 5, 1000), std::vector<int>{1});
 }
 
 // ---------------------------------------------------------- RotationHistogram

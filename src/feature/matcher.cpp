@@ -82,12 +82,14 @@ FeatureGrid::FeatureGrid(std::vector<cv::Point2f> points, std::vector<int> level
 
 int FeatureGrid::cellCol(float x) const {
   const float c = std::floor((x - bounds_.x) * static_cast<float>(cols_) / bounds_.width);
-  return static_cast<int>(std::clamp(c, 0.f, static_cast<float>(cols_ - 1)));
+  if (!(c >= 0.f)) return 0;  // also NaN
+  return static_cast<int>(std::min(c, static_cast<float>(cols_ - 1)));
 }
 
 int FeatureGrid::cellRow(float y) const {
   const float r = std::floor((y - bounds_.y) * static_cast<float>(rows_) / bounds_.height);
-  return static_cast<int>(std::clamp(r, 0.f, static_cast<float>(rows_ - 1)));
+  if (!(r >= 0.f)) return 0;
+  return static_cast<int>(std::min(r, static_cast<float>(rows_ - 1)));
 }
 
 std::vector<int> FeatureGrid::featuresInArea(float x, float y, float radius, int min_level, int max_level) const {
@@ -116,6 +118,7 @@ RotationHistogram::RotationHistogram(int bins) : bins_(static_cast<std::size_t>(
 
 int RotationHistogram::binOf(float angle1_deg, float angle2_deg) const {
   const int n = static_cast<int>(bins_.size());
+  if (!std::isfinite(angle1_deg) || !std::isfinite(angle2_deg)) return 0;
   double difference = std::fmod(static_cast<double>(angle1_deg) - angle2_deg, 360.0);
   if (difference < 0) difference += 360.0;
   const int bin = static_cast<int>(std::floor(difference * n / 360.0 + 0.5));

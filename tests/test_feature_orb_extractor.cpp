@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -48,6 +49,11 @@ TEST(OrbExtractor, QuotasAreGeometricAndSumToN) {
   EXPECT_EQ(sum, 1000);
   EXPECT_EQ(quotas[0], 217);  // 1000 (1 - 1/1.2) / (1 - 1.2^-8) = 217.0
   for (int l = 1; l < 7; ++l) EXPECT_NEAR(quotas[l], quotas[l - 1] / 1.2, 1.0) << "level " << l;
+  for (int n = 0; n <= 60; ++n) {  // small counts (detection boxes) still sum exactly
+    const std::vector<int> q = extractor.levelQuotas(n);
+    EXPECT_EQ(std::accumulate(q.begin(), q.end(), 0), n) << n;
+    EXPECT_TRUE(std::all_of(q.begin(), q.end(), [](int v) { return v >= 0; })) << n;
+  }
 }
 
 TEST(OrbExtractor, RealFrameGivesTheRequestedFeaturesOnEveryLevel) {

@@ -301,7 +301,8 @@ std::vector<int> OrbExtractor::levelQuotas(int n_features) const {
   int assigned = 0;
   double term = first;
   for (int l = 0; l + 1 < n_levels; ++l) {
-    quotas[l] = static_cast<int>(std::lround(term));
+    // Capped: for small n, rounding every term up could exceed n.
+    quotas[l] = std::min(static_cast<int>(std::lround(term)), n_features - assigned);
     assigned += quotas[l];
     term *= ratio;
   }

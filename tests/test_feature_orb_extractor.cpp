@@ -192,6 +192,51 @@ TEST(OrbExtractor, DescriptorsAndAnglesFollowA90DegreeRotation) {
   EXPECT_LT(median_error, 2.0);
 }
 
+// Off the pixel grid: turned by 30 degrees about the centre (bilinear), the
+// keypoints found again at the same place keep their descriptors within the
+// matching threshold and their angles turn by 30 degrees.
+TEST(OrbExtractor, DescriptorsAndAnglesFollowA30DegreeRotation) {
+  const cv::Mat gray = test::tumGray(kSequence, 0);
+  const cv::Point2f centre(gray.cols / 2.f, gray.rows / 2.f);
+  const cv::Mat to_rotated = cv::getRotationMatrix2D(centre, 30.0, 1.0);  // counter-clockwise on screen
+  cv::Mat rotated;
+  cv::warpAffine(gray, rotated, to_rotated, gray.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::Mat to_original;
+  cv::invertAffineTransform(to_rotated, to_original);
+  const Extraction original = extractFrom(gray);
+  const Extraction turned = extractFrom(rotated);
+
+  int pairs = 0, matchable = 0;
+  std::vector<double> angle_errors;
+  for (std::size_t j = 0; j < turned.keypoints.size(); ++j) {
+    const cv::KeyPoint& kr = turned.keypoints[j];
+    const cv::Point2f back(static_cast<float>(to_original.at<double>(0, 0) * kr.pt.x + to_original.at<double>(0, 1) * kr.pt.y + to_original.at<double>(0, 2)),
+                           static_cast<float>(to_original.at<double>(1, 0) * kr.pt.x + to_original.at<double>(1, 1) * kr.pt.y + to_original.at<double>(1, 2)));
+    int best = -1;
+    double best_distance = 1.5 * std::pow(1.2, kr.octave);
+    for (std::size_t i = 0; i < original.keypoints.size(); ++i) {
+      const cv::KeyPoint& ko = original.keypoints[i];
+      if (ko.octave != kr.octave) continue;
+      const double d = cv::norm(ko.pt - back);
+      if (d <= best_distance) best_distance = d, best = static_cast<int>(i);
+    }
+    if (best < 0) continue;
+    ++pairs;
+    matchable += cv::norm(original.descriptors.row(best), turned.descriptors.row(static_cast<int>(j)), cv::NORM_HAMMING) <= 50;
+    // Image y points down, so a counter-clockwise turn on screen lowers the angle by 30.
+    angle_errors.push_back(std::abs(std::remainder(kr.angle - original.keypoints[best].angle + 30.0, 360.0)));
+  }
+  std::sort(angle_errors.begin(), angle_errors.end());
+  ASSERT_FALSE(angle_errors.empty());
+  const double median_error = angle_errors[angle_errors.size() / 2];
+  std::cout << pairs << " keypoints found at the same place; " << matchable << " with Hamming <= 50; median angle error "
+            << median_error << " deg\n";
+  // Measured: 383 pairs, 377 within 50, median angle error 1.3 deg.
+  EXPECT_GE(pairs, 250);
+  EXPECT_GE(matchable, 0.9 * pairs);
+  EXPECT_LT(median_error, 3.0);
+}
+
 TEST(OrbExtractor, RoiExtractionStaysInsideAndRespectsTheCount) {
   const cv::Mat gray = test::tumGray(kSequence, 0);
   const OrbExtractor extractor{OrbParams()};

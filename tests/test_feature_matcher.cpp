@@ -121,6 +121,26 @@ TEST(Hamming, CountsDifferingBitsExactly) {
   }
 }
 
+TEST(Hamming, NearestTwoAmongCandidates) {
+  cv::Mat descriptors(5, 32, CV_8U, cv::Scalar(0));
+  const std::uint8_t query[32] = {};
+  descriptors.at<std::uint8_t>(0, 0) = 0x0F;  // distance 4
+  descriptors.at<std::uint8_t>(1, 5) = 0x01;  // 1
+  descriptors.at<std::uint8_t>(2, 9) = 0x03;  // 2
+  descriptors.at<std::uint8_t>(3, 1) = 0x03;  // 2, after row 2
+  descriptors.at<std::uint8_t>(4, 2) = 0xFF;  // 8
+  NearestTwo r = nearestTwo(query, descriptors, {0, 4, 3, 1, 2});
+  EXPECT_EQ(r.index, 1);
+  EXPECT_EQ(r.distance, 1);
+  EXPECT_EQ(r.second_index, 3);  // first of the two at distance 2 in candidate order
+  EXPECT_EQ(r.second_distance, 2);
+  r = nearestTwo(query, descriptors, {4});
+  EXPECT_EQ(r.index, 4);
+  EXPECT_EQ(r.distance, 8);
+  EXPECT_EQ(r.second_index, -1);
+  EXPECT_EQ(nearestTwo(query, descriptors, {}).index, -1);
+}
+
 // ---------------------------------------------------------------- FeatureGrid
 
 TEST(FeatureGrid, QueryEqualsBruteForce) {

@@ -58,6 +58,21 @@ cv::Rect2f undistortedImageBounds(const PinholeCamera& camera) {
   return cv::Rect2f(x0, y0, x1 - x0, y1 - y0);
 }
 
+VSLAM_POPCNT_CLONES NearestTwo nearestTwo(const std::uint8_t* descriptor, const cv::Mat& descriptors,
+                                          const std::vector<int>& candidates) {
+  NearestTwo result;
+  for (int index : candidates) {
+    const int d = hammingDistance(descriptor, row(descriptors, index));
+    if (result.index < 0 || d < result.distance) {
+      result.second_index = result.index, result.second_distance = result.distance;
+      result.index = index, result.distance = d;
+    } else if (result.second_index < 0 || d < result.second_distance) {
+      result.second_index = index, result.second_distance = d;
+    }
+  }
+  return result;
+}
+
 // ---------------------------------------------------------------- FeatureGrid
 
 FeatureGrid::FeatureGrid(std::vector<cv::Point2f> points, std::vector<int> levels, const cv::Rect2f& bounds, int cols,

@@ -46,7 +46,7 @@ void validate(const BundleProblem& problem, double bf) {
   }
 }
 
-ceres::LinearSolverType chooseLinearSolver(int free_keyframes, int free_points,
+ceres::LinearSolverType chooseLinearSolver(BundleLinearSolver requested, int free_keyframes, int free_points,
                                            ceres::SparseLinearAlgebraLibraryType* sparse_library) {
   const bool have_suitesparse = ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE);
   const bool have_eigen_sparse = ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::EIGEN_SPARSE);
@@ -54,6 +54,12 @@ ceres::LinearSolverType chooseLinearSolver(int free_keyframes, int free_points,
   const bool have_sparse = have_suitesparse || have_eigen_sparse;
   // Schur solvers need both points (eliminated) and cameras (kept).
   if (free_keyframes == 0 || free_points == 0) return have_sparse ? ceres::SPARSE_NORMAL_CHOLESKY : ceres::DENSE_QR;
+  switch (requested) {
+    case BundleLinearSolver::DenseSchur: return ceres::DENSE_SCHUR;
+    case BundleLinearSolver::SparseSchur: return have_sparse ? ceres::SPARSE_SCHUR : ceres::ITERATIVE_SCHUR;
+    case BundleLinearSolver::IterativeSchur: return ceres::ITERATIVE_SCHUR;
+    case BundleLinearSolver::Automatic: break;
+  }
   if (free_keyframes <= kMaxKeyframesForDenseSchur) return ceres::DENSE_SCHUR;
   return have_sparse ? ceres::SPARSE_SCHUR : ceres::ITERATIVE_SCHUR;
 }
@@ -142,8 +148,11 @@ BundleResult bundleAdjust(const PinholeCamera& camera, double bf, BundleProblem&
   AbortCallback abort_callback(options.abort_flag);
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type =
-      chooseLinearSolver(free_keyframes, free_points, &solver_options.sparse_linear_algebra_library_type);
+      chooseLinearSolver(options.linear_solver, free_keyframes, free_points,
+                         &solver_options.sparse_linear_algebra_library_type);
   solver_options.num_threads = options.num_threads;
+  // Schur-Jacobi preconditioning is the usual choice for bundle adjustment.
+  solver_options.preconditioner_type = ceres::SCHUR_JACOBI;
   solver_options.logging_type = ceres::SILENT;
   solver_options.callbacks.push_back(&abort_callback);
 

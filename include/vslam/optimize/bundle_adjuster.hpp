@@ -50,6 +50,13 @@ struct BundleProblem {
   std::vector<BaObservation> observations;
 };
 
+enum class BundleLinearSolver {
+  Automatic,  // dense Schur up to 40 free keyframes, else sparse Schur (SuiteSparse or Eigen)
+  DenseSchur,
+  SparseSchur,
+  IterativeSchur,
+};
+
 struct BundleOptions {
   // Phase 1 runs with the robust loss (if `robust`). If `remove_outliers`, the
   // observations failing the chi2 test are then dropped and phase 2 runs
@@ -63,6 +70,7 @@ struct BundleOptions {
   double chi2_mono = kChi2Mono;
   double chi2_stereo = kChi2Stereo;
   int num_threads = 1;
+  BundleLinearSolver linear_solver = BundleLinearSolver::Automatic;
   // Local Mapping sets this when a new keyframe arrives; the solver stops
   // after its current iteration, keeps the progress made, and skips phase 2.
   const std::atomic<bool>* abort_flag = nullptr;

@@ -108,6 +108,11 @@ TEST(Reprojection, ResidualIsWhitenedPredictionMinusMeasurement) {
   EXPECT_TRUE(check.depth_positive);
 }
 
+TEST(Reprojection, DepthGivesTheStereoRightCoordinate) {
+  // bf = 40 px*m, depth 2 m: disparity 20 px.
+  EXPECT_DOUBLE_EQ(rightCoordinateFromDepth(300.0, 2.0, 40.0), 280.0);
+}
+
 TEST(Reprojection, PointBehindCameraGivesZeroResidualAndJacobian) {
   const ReprojectionCost<2> cost(model(), Vec2(320, 240), -1, 1.0);
   const PoseParameters pose = poseToParameters(SE3());

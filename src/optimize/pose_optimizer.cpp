@@ -34,7 +34,7 @@ PoseOptimizationResult optimizePose(const PinholeCamera& camera, double bf, cons
 
   PoseParameters pose = poseToParameters(T_cw_initial);
   PoseOptimizationResult result;
-  result.inlier.assign(observations.size(), true);
+  result.inlier.assign(observations.size(), true);  // the first round uses every observation
 
   auto classify = [&]() {
     const SE3 T_cw = poseFromParameters(pose.data());
@@ -95,11 +95,15 @@ PoseOptimizationResult optimizePose(const PinholeCamera& camera, double bf, cons
       huber_mono.Reset(nullptr, ceres::TAKE_OWNERSHIP);
       huber_stereo.Reset(nullptr, ceres::TAKE_OWNERSHIP);
     }
+    const std::vector<bool> used_in_this_round = result.inlier;
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &problem, &summary);
     classify();
-    for (size_t i = 0; i < terms.size(); ++i) terms[i].setActive(result.inlier[i]);
     if (result.n_inliers < 10) break;  // too few left to refine further (ORB-SLAM stops here too)
+    // Without the robust loss and with the same inliers, another round would
+    // solve the problem it has just solved.
+    if (round >= options.robust_rounds && result.inlier == used_in_this_round) break;
+    for (size_t i = 0; i < terms.size(); ++i) terms[i].setActive(result.inlier[i]);
   }
   result.T_cw = poseFromParameters(pose.data());
   return result;

@@ -77,9 +77,12 @@ namespace vslam::test {
 // consecutive keyframes, so 2000 points give 8000 observations. Pixels carry
 // Gaussian noise of `noise_px` sigma (scaled by the pyramid level), a fraction
 // `outlier_ratio` of them is moved 20..50 sigma; free poses start 2 cm / 1 deg
-// off and free points 5 cm off.
+// off and free points 5 cm off. Optionally returns the true poses and which
+// observations were made outliers.
 inline BundleProblem localBundleScene(const PinholeCamera& camera, int n_keyframes, int n_points,
-                                      double noise_px, double outlier_ratio, unsigned seed) {
+                                      double noise_px, double outlier_ratio, unsigned seed,
+                                      std::vector<SE3>* true_poses = nullptr,
+                                      std::vector<bool>* is_outlier = nullptr) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> gauss(0.0, 1.0);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -105,13 +108,16 @@ inline BundleProblem localBundleScene(const PinholeCamera& camera, int n_keyfram
       obs.inv_sigma2 = 1.0 / std::pow(1.2, 2 * level(rng));
       const double sigma = 1.0 / std::sqrt(obs.inv_sigma2);
       obs.pixel = camera.project(truth[k] * p_w) + noise_px * sigma * Vec2(gauss(rng), gauss(rng));
-      if (unit(rng) < outlier_ratio) {
+      const bool outlier = unit(rng) < outlier_ratio;
+      if (outlier) {
         const Vec3 d = randomUnitVector(rng);
         obs.pixel += (20.0 + 30.0 * unit(rng)) * sigma * Vec2(d.x(), d.y()).normalized();
       }
       problem.observations.push_back(obs);
+      if (is_outlier) is_outlier->push_back(outlier);
     }
   }
+  if (true_poses) *true_poses = truth;
   return problem;
 }
 

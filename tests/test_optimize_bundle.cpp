@@ -245,6 +245,64 @@ TEST(BundleAdjust, PointBehindCameraIsAnOutlierNotACrash) {
   expectMatchesTruth(scene.problem, scene.truth, 1e-6);
 }
 
+// Noisy, Local-Mapping-sized problem (the benchmark's): no exact answer, but
+// the gross outliers must be caught, few noisy inliers may be lost, and the
+// free poses must come back close to the truth (1 px noise times the level's
+// sigma, 4-observation tracks, depths 4-10 m: about 1 cm is what the data allow).
+struct NoisyOutcome {
+  int injected = 0, caught = 0, inliers = 0, inliers_flagged = 0;
+  double max_translation_error = 0, max_rotation_error = 0;
+};
+
+NoisyOutcome runNoisyLocalProblem(const BundleOptions& options) {
+  const PinholeCamera camera = test::syntheticCamera();
+  std::vector<SE3> truth;
+  std::vector<bool> is_outlier;
+  BundleProblem problem = test::localBundleScene(camera, 20, 2000, 1.0, 0.03, 7, &truth, &is_outlier);
+  const BundleResult result = bundleAdjust(camera, 0.0, problem, options);
+  EXPECT_LT(result.final_cost, result.initial_cost);
+  NoisyOutcome outcome;
+  for (size_t i = 0; i < is_outlier.size(); ++i) {
+    if (is_outlier[i]) {
+      ++outcome.injected;
+      outcome.caught += result.outlier[i] ? 1 : 0;
+    } else {
+      ++outcome.inliers;
+      outcome.inliers_flagged += result.outlier[i] ? 1 : 0;
+    }
+  }
+  for (size_t k = 0; k < truth.size(); ++k) {
+    outcome.max_translation_error =
+        std::max(outcome.max_translation_error, (problem.keyframes[k].T_cw.t - truth[k].t).norm());
+    outcome.max_rotation_error =
+        std::max(outcome.max_rotation_error, test::rotationDifference(problem.keyframes[k].T_cw.R, truth[k].R));
+  }
+  return outcome;
+}
+
+TEST(BundleAdjust, NoisyLocalProblemWithHuber) {
+  const NoisyOutcome outcome = runNoisyLocalProblem(BundleOptions());
+  EXPECT_GT(outcome.injected, 200);
+  // Under Huber a few outliers at the end of a 4-observation track pull their
+  // point and survive (4 of 241 with this seed); see docs/OPTIMIZATION.md.
+  EXPECT_GE(outcome.caught, outcome.injected - 6);
+  // With 1-sigma noise about 5 % of good observations exceed the 95 % quantile
+  // before adjustment; fitting absorbs part of the noise.
+  EXPECT_LT(outcome.inliers_flagged, 0.05 * outcome.inliers);
+  EXPECT_LT(outcome.max_translation_error, 0.02);
+  EXPECT_LT(outcome.max_rotation_error, test::degrees(0.2));
+}
+
+TEST(BundleAdjust, NoisyLocalProblemWithCauchyCatchesEveryOutlier) {
+  BundleOptions options;
+  options.robust_loss = RobustLoss::Cauchy;
+  const NoisyOutcome outcome = runNoisyLocalProblem(options);
+  EXPECT_EQ(outcome.caught, outcome.injected);
+  EXPECT_LT(outcome.inliers_flagged, 0.05 * outcome.inliers);
+  EXPECT_LT(outcome.max_translation_error, 0.02);
+  EXPECT_LT(outcome.max_rotation_error, test::degrees(0.2));
+}
+
 TEST(BundleAdjust, RejectsOutOfRangeIndices) {
   BundleScene scene = makeScene(2, 5, 0.0, 22);
   scene.problem.observations[4].point = 5;

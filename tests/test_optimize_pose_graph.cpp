@@ -100,6 +100,19 @@ TEST(Sim3PoseGraph, FixedScaleKeepsEveryScale) {
   }
 }
 
+TEST(Sim3PoseGraph, WeightsAverageConflictingMeasurements) {
+  // Two measurements of the same relative translation, weights 1 and 3: the
+  // least-squares answer is their weighted mean, rotation and scale untouched.
+  std::vector<PoseGraphVertex> vertices{{0, Sim3(), true}, {1, Sim3(1.0, Mat3::Identity(), Vec3(5, 5, 5)), false}};
+  const Vec3 t_a(1.0, 0.0, 0.0), t_b(0.0, 2.0, 0.0);
+  const std::vector<PoseGraphEdge> edges{{0, 1, Sim3(1.0, Mat3::Identity(), t_a), 1.0},
+                                         {0, 1, Sim3(1.0, Mat3::Identity(), t_b), 3.0}};
+  optimizeSim3PoseGraph(vertices, edges);
+  EXPECT_LT((vertices[1].S_cw.t - (t_a + 3.0 * t_b) / 4.0).norm(), 1e-9);
+  EXPECT_NEAR(vertices[1].S_cw.s, 1.0, 1e-9);
+  EXPECT_LT(test::rotationDifference(vertices[1].S_cw.R, Mat3::Identity()), 1e-9);
+}
+
 TEST(Sim3PoseGraph, VertexWithoutEdgesIsUntouched) {
   const LoopScene scene = makeLoop(8, true);
   std::vector<PoseGraphVertex> vertices = driftedVertices(scene, Sim3());

@@ -64,6 +64,17 @@ ceres::LinearSolverType chooseLinearSolver(BundleLinearSolver requested, int fre
   return have_sparse ? ceres::SPARSE_SCHUR : ceres::ITERATIVE_SCHUR;
 }
 
+// Ceres' losses act on the squared norm s: Huber(a) is quadratic up to
+// s = a^2, Cauchy(b) is b^2 log(1 + s / b^2).
+ceres::LossFunction* makeRobustLoss(const BundleOptions& options, double scale) {
+  if (!options.robust) return nullptr;
+  switch (options.robust_loss) {
+    case RobustLoss::Cauchy: return new ceres::CauchyLoss(scale);
+    case RobustLoss::Huber: break;
+  }
+  return new ceres::HuberLoss(scale);
+}
+
 }  // namespace
 
 BundleResult bundleAdjust(const PinholeCamera& camera, double bf, BundleProblem& problem,
@@ -96,10 +107,8 @@ BundleResult bundleAdjust(const PinholeCamera& camera, double bf, BundleProblem&
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem ceres_problem(problem_options);
-  ceres::LossFunctionWrapper loss_mono(options.robust ? new ceres::HuberLoss(options.huber_mono) : nullptr,
-                                       ceres::TAKE_OWNERSHIP);
-  ceres::LossFunctionWrapper loss_stereo(options.robust ? new ceres::HuberLoss(options.huber_stereo) : nullptr,
-                                         ceres::TAKE_OWNERSHIP);
+  ceres::LossFunctionWrapper loss_mono(makeRobustLoss(options, options.huber_mono), ceres::TAKE_OWNERSHIP);
+  ceres::LossFunctionWrapper loss_stereo(makeRobustLoss(options, options.huber_stereo), ceres::TAKE_OWNERSHIP);
   PoseManifold pose_manifold;
   PoseFixedTranslationNormManifold fixed_norm_manifold;
 

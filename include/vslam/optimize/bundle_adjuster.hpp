@@ -57,6 +57,12 @@ enum class BundleLinearSolver {
   IterativeSchur,
 };
 
+// Loss of phase 1. Huber is ORB-SLAM's choice. Cauchy redescends: on short
+// tracks (3-4 observations) a gross outlier at the end of a track can pull
+// the point under Huber so that good observations fail the chi2 test instead;
+// Cauchy resists that better (see docs/OPTIMIZATION.md).
+enum class RobustLoss { Huber, Cauchy };
+
 struct BundleOptions {
   // Phase 1 runs with the robust loss (if `robust`). If `remove_outliers`, the
   // observations failing the chi2 test are then dropped and phase 2 runs
@@ -64,7 +70,10 @@ struct BundleOptions {
   int iterations_first = 5;
   int iterations_second = 10;
   bool robust = true;
+  RobustLoss robust_loss = RobustLoss::Huber;
   bool remove_outliers = true;
+  // Scale of the robust loss on the whitened residual norm (Huber's delta,
+  // Cauchy's b = delta^2).
   double huber_mono = std::sqrt(kChi2Mono);
   double huber_stereo = std::sqrt(kChi2Stereo);
   double chi2_mono = kChi2Mono;

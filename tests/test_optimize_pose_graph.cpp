@@ -108,7 +108,10 @@ TEST(Sim3PoseGraph, WeightsAverageConflictingMeasurements) {
   const std::vector<PoseGraphEdge> edges{{0, 1, Sim3(1.0, Mat3::Identity(), t_a), 1.0},
                                          {0, 1, Sim3(1.0, Mat3::Identity(), t_b), 3.0}};
   optimizeSim3PoseGraph(vertices, edges);
-  EXPECT_LT((vertices[1].S_cw.t - (t_a + 3.0 * t_b) / 4.0).norm(), 1e-9);
+  // The minimum has non-zero cost, so Levenberg-Marquardt stops on Ceres'
+  // relative function tolerance (1e-6) about 1e-4 of the first step short of
+  // it; the unweighted mean would be 0.56 away.
+  EXPECT_LT((vertices[1].S_cw.t - (t_a + 3.0 * t_b) / 4.0).norm(), 1e-3);
   EXPECT_NEAR(vertices[1].S_cw.s, 1.0, 1e-9);
   EXPECT_LT(test::rotationDifference(vertices[1].S_cw.R, Mat3::Identity()), 1e-9);
 }

@@ -303,6 +303,32 @@ TEST(BundleAdjust, NoisyLocalProblemWithCauchyCatchesEveryOutlier) {
   EXPECT_LT(outcome.max_rotation_error, test::degrees(0.2));
 }
 
+TEST(BundleAdjust, EverythingFixedChangesNothingButStillClassifies) {
+  BundleScene scene = makeScene(3, 20, 0.0, 25);
+  for (BaKeyframe& kf : scene.problem.keyframes) kf.fixed = true;
+  for (BaPoint& point : scene.problem.points) point.fixed = true;
+  scene.problem.observations[7].pixel.x() += 40.0 / std::sqrt(scene.problem.observations[7].inv_sigma2);
+  const BundleProblem before = scene.problem;
+  const BundleResult result = bundleAdjust(scene.camera, scene.bf, scene.problem);
+  EXPECT_EQ(result.n_outliers, 1);
+  EXPECT_TRUE(result.outlier[7]);
+  EXPECT_EQ(result.iterations, 0);
+  for (size_t k = 0; k < before.keyframes.size(); ++k) {
+    EXPECT_EQ(scene.problem.keyframes[k].T_cw.t, before.keyframes[k].T_cw.t);
+  }
+  for (size_t p = 0; p < before.points.size(); ++p) {
+    EXPECT_EQ(scene.problem.points[p].position_w, before.points[p].position_w);
+  }
+}
+
+TEST(BundleAdjust, EmptyProblem) {
+  BundleProblem problem;
+  const BundleResult result = bundleAdjust(test::syntheticCamera(), 0.0, problem);
+  EXPECT_TRUE(result.outlier.empty());
+  EXPECT_EQ(result.n_outliers, 0);
+  EXPECT_FALSE(result.aborted);
+}
+
 TEST(BundleAdjust, RejectsOutOfRangeIndices) {
   BundleScene scene = makeScene(2, 5, 0.0, 22);
   scene.problem.observations[4].point = 5;

@@ -132,6 +132,8 @@ TEST(Sim3PoseGraph, RejectsBadEdges) {
   EXPECT_THROW(optimizeSim3PoseGraph(vertices, {{0, 2, Sim3(), 1.0}}), std::invalid_argument);
   EXPECT_THROW(optimizeSim3PoseGraph(vertices, {{1, 1, Sim3(), 1.0}}), std::invalid_argument);
   EXPECT_THROW(optimizeSim3PoseGraph(vertices, {{0, 1, Sim3(), 0.0}}), std::invalid_argument);
+  vertices[1].S_cw.s = 0.0;
+  EXPECT_THROW(optimizeSim3PoseGraph(vertices, {{0, 1, Sim3(), 1.0}}), std::invalid_argument);
 }
 
 TEST(Sim3PoseGraph, RigidPoseKeepsRotationAndCameraCentre) {

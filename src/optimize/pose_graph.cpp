@@ -82,6 +82,13 @@ PoseGraphResult optimizeSim3PoseGraph(std::vector<PoseGraphVertex>& vertices, co
     if (!(edge.weight > 0)) throw std::invalid_argument("optimizeSim3PoseGraph: edge weight must be > 0");
   }
 
+  for (const PoseGraphVertex& vertex : vertices) {
+    if (!(vertex.S_cw.s > 0)) {
+      throw std::invalid_argument("optimizeSim3PoseGraph: vertex " + std::to_string(vertex.id) +
+                                  " has a non-positive scale");
+    }
+  }
+
   std::vector<Sim3Parameters> parameters;
   parameters.reserve(vertices.size());
   for (const PoseGraphVertex& vertex : vertices) parameters.emplace_back(vertex.S_cw);

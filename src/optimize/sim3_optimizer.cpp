@@ -1,6 +1,7 @@
 // optimizeSim3: Sim(3) refinement between the two keyframes of a loop candidate.
 #include <cmath>
 #include <memory>
+#include <stdexcept>
 
 #include <ceres/ceres.h>
 
@@ -86,6 +87,7 @@ bool isInlier(const ProjectionModel& model, const Sim3& S12, const Sim3& S21, co
 
 Sim3OptimizationResult optimizeSim3(const PinholeCamera& camera, const std::vector<Sim3Match>& matches, Sim3& S12,
                                     const Sim3OptimizationOptions& options) {
+  if (!(S12.s > 0)) throw std::invalid_argument("optimizeSim3: the initial scale must be > 0");
   const ProjectionModel model(camera, 0.0);
   Sim3Parameters parameters(S12);
 

@@ -44,7 +44,8 @@ struct PoseGraphResult {
 // error similarity E = S_to_from^-1 * S_to_w * S_from_w^-1 written as
 // (2 * vec(quaternion of E), translation of E, log scale of E): zero exactly
 // when the estimate agrees with the measurement. Vertices without edges are
-// left unchanged. Throws std::invalid_argument for bad edge indices.
+// left unchanged. Throws std::invalid_argument for bad edge indices or
+// weights, or a vertex scale <= 0.
 PoseGraphResult optimizeSim3PoseGraph(std::vector<PoseGraphVertex>& vertices, const std::vector<PoseGraphEdge>& edges,
                                       const PoseGraphOptions& options = {});
 
@@ -84,6 +85,7 @@ struct Sim3OptimizationResult {
 // a Huber loss. After the first iterations, matches whose error in either
 // image exceeds the threshold (or with a point behind a camera) are removed
 // and the rest is optimised again; the final classification is returned.
+// Throws std::invalid_argument if S12.s <= 0.
 Sim3OptimizationResult optimizeSim3(const PinholeCamera& camera, const std::vector<Sim3Match>& matches, Sim3& S12,
                                     const Sim3OptimizationOptions& options = {});
 

@@ -14,7 +14,13 @@ namespace {
 struct PoseOnlyTerm {
   std::unique_ptr<PoseOnlyReprojectionCost<2>> mono;
   std::unique_ptr<PoseOnlyReprojectionCost<3>> stereo;
-  void setActive(bool active) { mono ? mono->setActive(active) : stereo->setActive(active); }
+  void setActive(bool active) {
+    if (mono) {
+      mono->setActive(active);
+    } else {
+      stereo->setActive(active);
+    }
+  }
 };
 
 }  // namespace
@@ -100,9 +106,10 @@ PoseOptimizationResult optimizePose(const PinholeCamera& camera, double bf, cons
     ceres::Solve(solver_options, &problem, &summary);
     classify();
     if (result.n_inliers < 10) break;  // too few left to refine further (ORB-SLAM stops here too)
-    // Without the robust loss and with the same inliers, another round would
-    // solve the problem it has just solved.
-    if (round >= options.robust_rounds && result.inlier == used_in_this_round) break;
+    // A converged round without the robust loss that keeps the same inliers
+    // leaves nothing for another round to do.
+    const bool converged = summary.termination_type == ceres::CONVERGENCE;
+    if (converged && round >= options.robust_rounds && result.inlier == used_in_this_round) break;
     for (size_t i = 0; i < terms.size(); ++i) terms[i].setActive(result.inlier[i]);
   }
   result.T_cw = poseFromParameters(pose.data());

@@ -39,8 +39,9 @@ struct PoseOptimizationResult {
 // inliers (all, in the first round), then reclassifies every observation by
 // chi2 < threshold with the point in front of the camera; an observation
 // dropped in one round comes back if its error falls. Rounds stop early when
-// fewer than 10 inliers remain, or when a round without the robust loss leaves
-// the classification unchanged (the next one would solve the same problem).
+// fewer than 10 inliers remain, or when a round without the robust loss
+// converged and left the classification unchanged (the next one would solve
+// the same problem).
 // With fewer than 3 observations the pose is returned unchanged, only classified.
 PoseOptimizationResult optimizePose(const PinholeCamera& camera, double bf, const SE3& T_cw_initial,
                                     const std::vector<Vec3>& points_w,

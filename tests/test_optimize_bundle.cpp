@@ -192,6 +192,14 @@ TEST(BundleAdjust, FixedPointsAndKeyframesOnlyRefineTheFreePoints) {
   }
 }
 
+TEST(BundleAdjust, AllPointsFixedRefinesTheKeyframesOnly) {
+  BundleScene scene = makeScene(4, 60, 0.0, 26);
+  for (BaPoint& point : scene.problem.points) point.fixed = true;
+  perturb(scene, 27);  // only the keyframes move: the points are fixed at the truth
+  bundleAdjust(scene.camera, scene.bf, scene.problem);
+  expectMatchesTruth(scene.problem, scene.truth, 1e-6);
+}
+
 TEST(BundleAdjust, PresetAbortFlagStopsBeforeAnyStep) {
   BundleScene scene = makeScene(5, 100, 0.0, 16);
   scene.problem.keyframes[0].fixed = true;

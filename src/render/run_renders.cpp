@@ -57,9 +57,10 @@ std::vector<StampedPose> readPoses(const std::string& path) {
     if (numbers.size() != 8 && numbers.size() != 9)
       throw InputError(path, line_number,
                        "expected \"timestamp tx ty tz qx qy qz qw\" (8 numbers), got " + std::to_string(numbers.size()));
-    const double* pose = numbers.data() + numbers.size() - 7;
+    const size_t first = numbers.size() - 8;  // the timestamp's column
+    const double* pose = numbers.data() + first + 1;
     StampedPose stamped;
-    stamped.timestamp = pose[-1];
+    stamped.timestamp = numbers[first];
     stamped.T_wc = SE3(Quat(pose[6], pose[3], pose[4], pose[5]), Vec3(pose[0], pose[1], pose[2]));
     poses.push_back(stamped);
   }
@@ -239,10 +240,20 @@ std::vector<std::string> renderRunFolder(const std::string& run_dir_text, const 
     TrajectoryPlotInput input;
     const std::string groundtruth_path = resolveGroundTruth(report.groundtruth_file, run_dir);
     double computed_ate = -1.0;
+    std::vector<StampedPose> groundtruth;
     if (!groundtruth_path.empty()) {
-      input = alignedTrajectory(estimate, readPoses(groundtruth_path), report.mode == "mono", computed_ate);
+      // The figures are a by-product of a run: an unreadable ground truth
+      // (e.g. a KITTI pose file, not read here yet) costs the comparison, not the figures.
+      try {
+        groundtruth = readPoses(groundtruth_path);
+      } catch (const InputError& e) {
+        spdlog::warn("render: ground truth not used: {}", e.what());
+      }
+    }
+    if (!groundtruth.empty()) {
+      input = alignedTrajectory(estimate, groundtruth, report.mode == "mono", computed_ate);
     } else {
-      spdlog::info("render: no groundtruth_file in report.json; plotting the estimate alone");
+      if (groundtruth_path.empty()) spdlog::info("render: no groundtruth_file in report.json; plotting the estimate alone");
       for (const auto& pose : estimate) input.estimate.push_back(pose.T_wc.t);
     }
     // The report's ATE is the official number; ours (same rule) stands in when it has none.

@@ -192,6 +192,14 @@ TEST(BundleAdjust, FixedPointsAndKeyframesOnlyRefineTheFreePoints) {
   }
 }
 
+TEST(BundleAdjust, AllPointsFixedRefinesTheKeyframesOnly) {
+  BundleScene scene = makeScene(4, 60, 0.0, 26);
+  for (BaPoint& point : scene.problem.points) point.fixed = true;
+  perturb(scene, 27);  // only the keyframes move: the points are fixed at the truth
+  bundleAdjust(scene.camera, scene.bf, scene.problem);
+  expectMatchesTruth(scene.problem, scene.truth, 1e-6);
+}
+
 TEST(BundleAdjust, PresetAbortFlagStopsBeforeAnyStep) {
   BundleScene scene = makeScene(5, 100, 0.0, 16);
   scene.problem.keyframes[0].fixed = true;
@@ -243,6 +251,90 @@ TEST(BundleAdjust, PointBehindCameraIsAnOutlierNotACrash) {
   EXPECT_TRUE(std::isfinite(result.final_cost));
   scene.problem.points[0] = scene.truth.points[0];
   expectMatchesTruth(scene.problem, scene.truth, 1e-6);
+}
+
+// Noisy, Local-Mapping-sized problem (the benchmark's): no exact answer, but
+// the gross outliers must be caught, few noisy inliers may be lost, and the
+// free poses must come back close to the truth (1 px noise times the level's
+// sigma, 4-observation tracks, depths 4-10 m: about 1 cm is what the data allow).
+struct NoisyOutcome {
+  int injected = 0, caught = 0, inliers = 0, inliers_flagged = 0;
+  double max_translation_error = 0, max_rotation_error = 0;
+};
+
+NoisyOutcome runNoisyLocalProblem(const BundleOptions& options) {
+  const PinholeCamera camera = test::syntheticCamera();
+  std::vector<SE3> truth;
+  std::vector<bool> is_outlier;
+  BundleProblem problem = test::localBundleScene(camera, 20, 2000, 1.0, 0.03, 7, &truth, &is_outlier);
+  const BundleResult result = bundleAdjust(camera, 0.0, problem, options);
+  EXPECT_LT(result.final_cost, result.initial_cost);
+  NoisyOutcome outcome;
+  for (size_t i = 0; i < is_outlier.size(); ++i) {
+    if (is_outlier[i]) {
+      ++outcome.injected;
+      outcome.caught += result.outlier[i] ? 1 : 0;
+    } else {
+      ++outcome.inliers;
+      outcome.inliers_flagged += result.outlier[i] ? 1 : 0;
+    }
+  }
+  for (size_t k = 0; k < truth.size(); ++k) {
+    outcome.max_translation_error =
+        std::max(outcome.max_translation_error, (problem.keyframes[k].T_cw.t - truth[k].t).norm());
+    outcome.max_rotation_error =
+        std::max(outcome.max_rotation_error, test::rotationDifference(problem.keyframes[k].T_cw.R, truth[k].R));
+  }
+  return outcome;
+}
+
+TEST(BundleAdjust, NoisyLocalProblemWithHuber) {
+  const NoisyOutcome outcome = runNoisyLocalProblem(BundleOptions());
+  EXPECT_GT(outcome.injected, 200);
+  // Under Huber a few outliers at the end of a 4-observation track pull their
+  // point and survive (4 of 241 with this seed); see docs/OPTIMIZATION.md.
+  EXPECT_GE(outcome.caught, outcome.injected - 6);
+  // With 1-sigma noise about 5 % of good observations exceed the 95 % quantile
+  // before adjustment; fitting absorbs part of the noise.
+  EXPECT_LT(outcome.inliers_flagged, 0.05 * outcome.inliers);
+  EXPECT_LT(outcome.max_translation_error, 0.02);
+  EXPECT_LT(outcome.max_rotation_error, test::degrees(0.2));
+}
+
+TEST(BundleAdjust, NoisyLocalProblemWithCauchyCatchesEveryOutlier) {
+  BundleOptions options;
+  options.robust_loss = RobustLoss::Cauchy;
+  const NoisyOutcome outcome = runNoisyLocalProblem(options);
+  EXPECT_EQ(outcome.caught, outcome.injected);
+  EXPECT_LT(outcome.inliers_flagged, 0.05 * outcome.inliers);
+  EXPECT_LT(outcome.max_translation_error, 0.02);
+  EXPECT_LT(outcome.max_rotation_error, test::degrees(0.2));
+}
+
+TEST(BundleAdjust, EverythingFixedChangesNothingButStillClassifies) {
+  BundleScene scene = makeScene(3, 20, 0.0, 25);
+  for (BaKeyframe& kf : scene.problem.keyframes) kf.fixed = true;
+  for (BaPoint& point : scene.problem.points) point.fixed = true;
+  scene.problem.observations[7].pixel.x() += 40.0 / std::sqrt(scene.problem.observations[7].inv_sigma2);
+  const BundleProblem before = scene.problem;
+  const BundleResult result = bundleAdjust(scene.camera, scene.bf, scene.problem);
+  EXPECT_EQ(result.n_outliers, 1);
+  EXPECT_TRUE(result.outlier[7]);
+  EXPECT_EQ(result.iterations, 0);
+  for (size_t k = 0; k < before.keyframes.size(); ++k) {
+    EXPECT_EQ(scene.problem.keyframes[k].T_cw.t, before.keyframes[k].T_cw.t);
+  }
+  for (size_t p = 0; p < before.points.size(); ++p) {
+    EXPECT_EQ(scene.problem.points[p].position_w, before.points[p].position_w);
+  }
+}
+
+TEST(BundleAdjust, EmptyProblem) {
+  BundleProblem problem;
+  const BundleResult result = bundleAdjust(test::syntheticCamera(), 0.0, problem);
+  EXPECT_TRUE(result.outlier.empty());
+  EXPECT_EQ(result.n_outliers, 0);
+  EXPECT_FALSE(result.aborted);
 }
 
 TEST(BundleAdjust, RejectsOutOfRangeIndices) {

@@ -131,6 +131,26 @@ TEST(OptimizePose, PointsBehindTheCameraAreOutliersNotCrashes) {
   for (size_t i = 0; i < scene.is_outlier.size(); ++i) EXPECT_EQ(result.inlier[i], !scene.is_outlier[i]) << i;
 }
 
+TEST(OptimizePose, DroppedObservationComesBackWhenItsErrorFalls) {
+  PoseScene scene = makeScene(300, 0.0, 11);
+  std::mt19937 rng(12);
+  scene.T_cw_initial = test::perturbPose(scene.T_cw_true, 0.3, test::degrees(10), rng);
+  PoseOptimizationOptions options;
+  options.iterations_per_round = 1;  // one step per round: the early rounds end far from the minimum
+  options.rounds = 1;
+  const PoseOptimizationResult after_one_round =
+      optimizePose(scene.camera, scene.bf, scene.T_cw_initial, scene.points_w, scene.observations, options);
+  // All observations are correct, yet the first round rejects many of them...
+  ASSERT_LT(after_one_round.n_inliers, 290);
+  ASSERT_GE(after_one_round.n_inliers, 10);
+  // ...and later rounds take every one of them back.
+  options.rounds = 10;
+  const PoseOptimizationResult result =
+      optimizePose(scene.camera, scene.bf, scene.T_cw_initial, scene.points_w, scene.observations, options);
+  EXPECT_EQ(result.n_inliers, 300);
+  expectPoseNear(result.T_cw, scene.T_cw_true, 1e-6);
+}
+
 TEST(OptimizePose, TooFewObservationsLeaveThePoseUnchanged) {
   const PoseScene scene = makeScene(2, 0.0, 9);
   const PoseOptimizationResult result =

@@ -91,6 +91,29 @@ TEST(Reprojection, JacobiansThroughFixedNormManifold) {
   checkJacobians<3>(PoseFixedTranslationNormManifold());
 }
 
+TEST(Reprojection, PoseOnlyCostMatchesTheFullCost) {
+  const ProjectionModel m = model();
+  const Vec2 pixel(300.0, 200.0);
+  const ReprojectionCost<3> full(m, pixel, 290.0, 0.5);
+  PoseOnlyReprojectionCost<3> pose_only(m, kPointW, pixel, 290.0, 0.5);
+  const PoseParameters pose = poseToParameters(kPose);
+  Eigen::Vector3d r_full, r_pose_only;
+  RowMajorMatrix J_full(3, 7), J_point(3, 3), J_pose_only(3, 7);
+  const double* full_parameters[] = {pose.data(), kPointW.data()};
+  double* full_jacobians[] = {J_full.data(), J_point.data()};
+  ASSERT_TRUE(full.Evaluate(full_parameters, r_full.data(), full_jacobians));
+  const double* pose_parameters[] = {pose.data()};
+  double* pose_jacobians[] = {J_pose_only.data()};
+  ASSERT_TRUE(pose_only.Evaluate(pose_parameters, r_pose_only.data(), pose_jacobians));
+  EXPECT_LT((r_full - r_pose_only).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((J_full - J_pose_only).cwiseAbs().maxCoeff(), 1e-9);
+  // Switched off, it contributes nothing.
+  pose_only.setActive(false);
+  ASSERT_TRUE(pose_only.Evaluate(pose_parameters, r_pose_only.data(), pose_jacobians));
+  EXPECT_EQ(r_pose_only, Eigen::Vector3d::Zero());
+  EXPECT_EQ(J_pose_only.cwiseAbs().maxCoeff(), 0.0);
+}
+
 TEST(Reprojection, ResidualIsWhitenedPredictionMinusMeasurement) {
   const ProjectionModel m = model();
   const Vec3 p_c = kPose * kPointW;
@@ -106,6 +129,11 @@ TEST(Reprojection, ResidualIsWhitenedPredictionMinusMeasurement) {
                                                     u_right_predicted + 3, 0.25);
   EXPECT_NEAR(check.chi2, 1.0 + 0.25 + 2.25, 1e-9);
   EXPECT_TRUE(check.depth_positive);
+}
+
+TEST(Reprojection, DepthGivesTheStereoRightCoordinate) {
+  // bf = 40 px*m, depth 2 m: disparity 20 px.
+  EXPECT_DOUBLE_EQ(rightCoordinateFromDepth(300.0, 2.0, 40.0), 280.0);
 }
 
 TEST(Reprojection, PointBehindCameraGivesZeroResidualAndJacobian) {

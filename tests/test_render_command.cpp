@@ -15,6 +15,7 @@
 #include "vslam/render/map_render.hpp"
 #include "vslam/render/plot_canvas.hpp"
 #include "vslam/render/run_renders.hpp"
+#include "vslam/render/trajectory_plot.hpp"
 
 namespace vslam {
 namespace {
@@ -38,12 +39,13 @@ constexpr int kBoxClass = 41;  // cup
 struct RunFolder {
   fs::path dir;
   std::vector<Vec3> groundtruth;
+  std::vector<Vec3> estimate;  // in the SLAM frame, as trajectory.txt holds it
   Vec3 box_min, box_max;
 };
 
-RunFolder writeRunFolder() {
+RunFolder writeRunFolder(const std::string& scratch_name) {
   RunFolder run;
-  run.dir = test::scratchDir("render_command") / "run";
+  run.dir = test::scratchDir(scratch_name) / "run";
   fs::create_directories(run.dir);
   // The SLAM frame: scale 0.5, 30° about z, shifted; timestamps 5 ms off the ground truth's.
   const Sim3 slam_from_world(0.5, Eigen::AngleAxisd(M_PI / 6, Vec3::UnitZ()).toRotationMatrix(), Vec3(1, 2, 3));
@@ -56,6 +58,7 @@ RunFolder writeRunFolder() {
     const Vec3 p = groundTruthAt(i);
     run.groundtruth.push_back(p);
     const Vec3 q = slam_from_world * p;
+    run.estimate.push_back(q);
     low = low.cwiseMin(q);
     high = high.cwiseMax(q);
     groundtruth << 100.0 + 0.1 * i << " " << p.x() << " " << p.y() << " " << p.z() << " 0 0 0 1\n";
@@ -82,7 +85,7 @@ RunFolder writeRunFolder() {
 }
 
 TEST(RenderCommand, WritesFiguresOfARunFolder) {
-  const RunFolder run = writeRunFolder();
+  const RunFolder run = writeRunFolder("render_command");
   const fs::path out = run.dir.parent_path() / "figures";
   const std::string command = std::string(VSLAM_BINARY_DIR) + "/vslam render " + run.dir.string() + " --out " +
                               out.string() + " > " + (run.dir.parent_path() / "stdout.txt").string();
@@ -106,6 +109,19 @@ TEST(RenderCommand, WritesFiguresOfARunFolder) {
   const PlotProjection map_top = fitTopView({run.box_min, run.box_max}, map.size());
   const Vec3 edge_middle(0.5 * (run.box_min.x() + run.box_max.x()), run.box_min.y(), run.box_max.z());
   EXPECT_LE(colourDistance(pixelAt(map, map_top.toPixel(edge_middle)), classColour(kBoxClass)), 6);
+}
+
+TEST(RenderCommand, UnreadableGroundTruthOnlyCostsTheComparison) {
+  const RunFolder run = writeRunFolder("render_command_kitti_gt");
+  std::ofstream(run.dir / "gt.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n";  // a KITTI pose line
+  std::ofstream(run.dir / "report.json") << R"({"sequence": "s", "mode": "mono", "groundtruth_file": "gt.txt"})";
+  const auto written = renderRunFolder(run.dir.string(), run.dir.string());
+  ASSERT_EQ(written.size(), 5u);
+  // The estimate alone, in its own frame and single colour.
+  const cv::Mat image = cv::imread((run.dir / "trajectory_top.png").string());
+  const PlotProjection top = fitTopView(run.estimate, image.size());
+  const cv::Point2d middle = top.toPixel(0.5 * (run.estimate[20] + run.estimate[21]));
+  EXPECT_LE(colourDistance(pixelAt(image, middle), kEstimateColour), 6);
 }
 
 TEST(RenderCommand, MissingRunFolderFailsWithItsName) {

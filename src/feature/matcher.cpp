@@ -58,6 +58,21 @@ cv::Rect2f undistortedImageBounds(const PinholeCamera& camera) {
   return cv::Rect2f(x0, y0, x1 - x0, y1 - y0);
 }
 
+VSLAM_POPCNT_CLONES NearestTwo nearestTwo(const std::uint8_t* descriptor, const cv::Mat& descriptors,
+                                          const std::vector<int>& candidates) {
+  NearestTwo result;
+  for (int index : candidates) {
+    const int d = hammingDistance(descriptor, row(descriptors, index));
+    if (result.index < 0 || d < result.distance) {
+      result.second_index = result.index, result.second_distance = result.distance;
+      result.index = index, result.distance = d;
+    } else if (result.second_index < 0 || d < result.second_distance) {
+      result.second_index = index, result.second_distance = d;
+    }
+  }
+  return result;
+}
+
 // ---------------------------------------------------------------- FeatureGrid
 
 FeatureGrid::FeatureGrid(std::vector<cv::Point2f> points, std::vector<int> levels, const cv::Rect2f& bounds, int cols,
@@ -82,12 +97,14 @@ FeatureGrid::FeatureGrid(std::vector<cv::Point2f> points, std::vector<int> level
 
 int FeatureGrid::cellCol(float x) const {
   const float c = std::floor((x - bounds_.x) * static_cast<float>(cols_) / bounds_.width);
-  return static_cast<int>(std::clamp(c, 0.f, static_cast<float>(cols_ - 1)));
+  if (!(c >= 0.f)) return 0;  // also NaN
+  return static_cast<int>(std::min(c, static_cast<float>(cols_ - 1)));
 }
 
 int FeatureGrid::cellRow(float y) const {
   const float r = std::floor((y - bounds_.y) * static_cast<float>(rows_) / bounds_.height);
-  return static_cast<int>(std::clamp(r, 0.f, static_cast<float>(rows_ - 1)));
+  if (!(r >= 0.f)) return 0;
+  return static_cast<int>(std::min(r, static_cast<float>(rows_ - 1)));
 }
 
 std::vector<int> FeatureGrid::featuresInArea(float x, float y, float radius, int min_level, int max_level) const {
@@ -116,6 +133,7 @@ RotationHistogram::RotationHistogram(int bins) : bins_(static_cast<std::size_t>(
 
 int RotationHistogram::binOf(float angle1_deg, float angle2_deg) const {
   const int n = static_cast<int>(bins_.size());
+  if (!std::isfinite(angle1_deg) || !std::isfinite(angle2_deg)) return 0;
   double difference = std::fmod(static_cast<double>(angle1_deg) - angle2_deg, 360.0);
   if (difference < 0) difference += 360.0;
   const int bin = static_cast<int>(std::floor(difference * n / 360.0 + 0.5));

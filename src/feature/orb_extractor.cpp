@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <queue>
 #include <random>
 #include <set>
@@ -91,9 +92,10 @@ void detectCorners(const cv::Mat& image, const cv::Rect& region, int threshold, 
 // Keeps at most `quota` corners spread over `area`: splits the area into
 // quadtree nodes, always splitting the largest node that still holds more than
 // one corner (ties: the fuller node, then the older), until there are `quota`
-// non-empty nodes; each node then contributes its strongest corner. Splitting
-// by size rather than by count is what spreads the corners: a sparse region
-// gets as many nodes as a dense one of the same size.
+// non-empty nodes; each node then contributes its strongest corner (ties: the
+// first found). Splitting by size rather than by count is what spreads the
+// corners: a sparse region gets as many nodes as a dense one of the same size.
+// Returns indices into `corners`, ascending.
 std::vector<int> distributeQuadtree(const std::vector<Corner>& corners, const cv::Rect2f& area, int quota) {
   std::vector<int> selected;
   if (quota <= 0 || corners.empty()) return selected;
@@ -102,29 +104,37 @@ std::vector<int> distributeQuadtree(const std::vector<Corner>& corners, const cv
     return selected;
   }
 
+  // A node owns the range [begin, end) of `order`; splitting partitions the
+  // range in place, so the tree needs no allocation per node.
   struct Node {
     float x0, y0, x1, y1;
-    std::vector<int> members;
-    bool split = false;
+    int begin, end;
+    bool split;
   };
+  std::vector<int> order(corners.size());
+  std::iota(order.begin(), order.end(), 0);
   std::vector<Node> nodes;
   // Roughly square roots: one per (width / height), as a wide image would otherwise start with flat nodes.
   const int n_roots = std::max(1, static_cast<int>(std::lround(area.width / std::max(1.f, area.height))));
   const float root_width = area.width / static_cast<float>(n_roots);
-  for (int i = 0; i < n_roots; ++i)
-    nodes.push_back(Node{area.x + i * root_width, area.y, area.x + (i + 1) * root_width, area.y + area.height, {}, false});
-  for (int i = 0; i < static_cast<int>(corners.size()); ++i) {
-    const int root = std::min(n_roots - 1, static_cast<int>((corners[i].keypoint.pt.x - area.x) / root_width));
-    nodes[std::max(0, root)].members.push_back(i);
+  const auto rootOf = [&](int i) {
+    return std::clamp(static_cast<int>((corners[i].keypoint.pt.x - area.x) / root_width), 0, n_roots - 1);
+  };
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return rootOf(a) < rootOf(b); });
+  for (int r = 0, begin = 0; r < n_roots; ++r) {
+    int end = begin;
+    while (end < static_cast<int>(order.size()) && rootOf(order[end]) == r) ++end;
+    if (end > begin)
+      nodes.push_back(Node{area.x + r * root_width, area.y, area.x + (r + 1) * root_width, area.y + area.height, begin, end, false});
+    begin = end;
   }
-  nodes.erase(std::remove_if(nodes.begin(), nodes.end(), [](const Node& n) { return n.members.empty(); }), nodes.end());
 
   // Priority: larger area first, then more members, then lower index.
   using Entry = std::tuple<float, int, int>;  // area, members, -index
   std::priority_queue<Entry> queue;
   const auto pushIfSplittable = [&](int index) {
     const Node& n = nodes[index];
-    if (n.members.size() > 1) queue.emplace((n.x1 - n.x0) * (n.y1 - n.y0), static_cast<int>(n.members.size()), -index);
+    if (n.end - n.begin > 1) queue.emplace((n.x1 - n.x0) * (n.y1 - n.y0), n.end - n.begin, -index);
   };
   for (int i = 0; i < static_cast<int>(nodes.size()); ++i) pushIfSplittable(i);
 
@@ -132,37 +142,44 @@ std::vector<int> distributeQuadtree(const std::vector<Corner>& corners, const cv
   while (n_leaves < quota && !queue.empty()) {
     const int index = -std::get<2>(queue.top());
     queue.pop();
-    const float x0 = nodes[index].x0, y0 = nodes[index].y0, x1 = nodes[index].x1, y1 = nodes[index].y1;
-    const float xm = 0.5f * (x0 + x1), ym = 0.5f * (y0 + y1);
-    Node children[4] = {{x0, y0, xm, ym, {}, false}, {xm, y0, x1, ym, {}, false},
-                        {x0, ym, xm, y1, {}, false}, {xm, ym, x1, y1, {}, false}};
-    for (int member : nodes[index].members) {
-      const cv::Point2f& p = corners[member].keypoint.pt;
-      children[(p.x < xm ? 0 : 1) + (p.y < ym ? 0 : 2)].members.push_back(member);
-    }
+    const Node parent = nodes[index];
     nodes[index].split = true;
-    nodes[index].members.clear();
+    const float xm = 0.5f * (parent.x0 + parent.x1), ym = 0.5f * (parent.y0 + parent.y1);
+    const auto first = order.begin() + parent.begin, last = order.begin() + parent.end;
+    const auto top = [&](int i) { return corners[i].keypoint.pt.y < ym; };
+    const auto left = [&](int i) { return corners[i].keypoint.pt.x < xm; };
+    const auto middle = std::partition(first, last, top);
+    const auto top_split = std::partition(first, middle, left);
+    const auto bottom_split = std::partition(middle, last, left);
+    const int b = parent.begin, tl = static_cast<int>(top_split - order.begin()),
+              m = static_cast<int>(middle - order.begin()), bl = static_cast<int>(bottom_split - order.begin()),
+              e = parent.end;
+    const Node children[4] = {{parent.x0, parent.y0, xm, ym, b, tl, false}, {xm, parent.y0, parent.x1, ym, tl, m, false},
+                              {parent.x0, ym, xm, parent.y1, m, bl, false}, {xm, ym, parent.x1, parent.y1, bl, e, false}};
     --n_leaves;
-    for (Node& child : children) {
-      if (child.members.empty()) continue;
-      nodes.push_back(std::move(child));
+    for (const Node& child : children) {
+      if (child.end == child.begin) continue;
+      nodes.push_back(child);
       ++n_leaves;
       pushIfSplittable(static_cast<int>(nodes.size()) - 1);
     }
   }
 
+  // Strongest corner per leaf; ties go to the lower index so the partition order does not matter.
+  const auto stronger = [&corners](int a, int b) {
+    const float ra = corners[a].keypoint.response, rb = corners[b].keypoint.response;
+    return ra > rb || (ra == rb && a < b);
+  };
   for (const Node& node : nodes) {
     if (node.split) continue;
-    int best = node.members.front();
-    for (int member : node.members)
-      if (corners[member].keypoint.response > corners[best].keypoint.response) best = member;
+    int best = order[node.begin];
+    for (int k = node.begin + 1; k < node.end; ++k)
+      if (stronger(order[k], best)) best = order[k];
     selected.push_back(best);
   }
   // The last split may overshoot by up to 3: drop the weakest.
   if (static_cast<int>(selected.size()) > quota) {
-    std::stable_sort(selected.begin(), selected.end(), [&corners](int a, int b) {
-      return corners[a].keypoint.response > corners[b].keypoint.response;
-    });
+    std::sort(selected.begin(), selected.end(), stronger);
     selected.resize(quota);
   }
   std::sort(selected.begin(), selected.end());  // back to scan order (row-major, as FAST found them)
@@ -284,7 +301,8 @@ std::vector<int> OrbExtractor::levelQuotas(int n_features) const {
   int assigned = 0;
   double term = first;
   for (int l = 0; l + 1 < n_levels; ++l) {
-    quotas[l] = static_cast<int>(std::lround(term));
+    // Capped: for small n, rounding every term up could exceed n.
+    quotas[l] = std::min(static_cast<int>(std::lround(term)), n_features - assigned);
     assigned += quotas[l];
     term *= ratio;
   }
@@ -293,6 +311,7 @@ std::vector<int> OrbExtractor::levelQuotas(int n_features) const {
 }
 
 ImagePyramid OrbExtractor::buildPyramid(const cv::Mat& image) const {
+  if (image.empty()) throw InputError("OrbExtractor::buildPyramid: empty image");
   cv::Mat gray;
   if (image.type() == CV_8UC1)
     gray = image;
@@ -308,8 +327,8 @@ ImagePyramid OrbExtractor::buildPyramid(const cv::Mat& image) const {
   pyramid.levels[0] = gray;
   for (int l = 1; l < params_.n_levels; ++l) {
     // Each level from the previous one (cheaper than from level 0; sizes from level 0 so they do not drift).
-    const cv::Size size(static_cast<int>(std::lround(gray.cols / scale_factors_[l])),
-                        static_cast<int>(std::lround(gray.rows / scale_factors_[l])));
+    const cv::Size size(std::max(1, static_cast<int>(std::lround(gray.cols / scale_factors_[l]))),
+                        std::max(1, static_cast<int>(std::lround(gray.rows / scale_factors_[l]))));
     cv::resize(pyramid.levels[l - 1], pyramid.levels[l], size, 0, 0, cv::INTER_LINEAR);
   }
   for (int l = 0; l < params_.n_levels; ++l)

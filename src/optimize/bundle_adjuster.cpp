@@ -46,7 +46,7 @@ void validate(const BundleProblem& problem, double bf) {
   }
 }
 
-ceres::LinearSolverType chooseLinearSolver(int free_keyframes, int free_points,
+ceres::LinearSolverType chooseLinearSolver(BundleLinearSolver requested, int free_keyframes, int free_points,
                                            ceres::SparseLinearAlgebraLibraryType* sparse_library) {
   const bool have_suitesparse = ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE);
   const bool have_eigen_sparse = ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::EIGEN_SPARSE);
@@ -54,8 +54,25 @@ ceres::LinearSolverType chooseLinearSolver(int free_keyframes, int free_points,
   const bool have_sparse = have_suitesparse || have_eigen_sparse;
   // Schur solvers need both points (eliminated) and cameras (kept).
   if (free_keyframes == 0 || free_points == 0) return have_sparse ? ceres::SPARSE_NORMAL_CHOLESKY : ceres::DENSE_QR;
+  switch (requested) {
+    case BundleLinearSolver::DenseSchur: return ceres::DENSE_SCHUR;
+    case BundleLinearSolver::SparseSchur: return have_sparse ? ceres::SPARSE_SCHUR : ceres::ITERATIVE_SCHUR;
+    case BundleLinearSolver::IterativeSchur: return ceres::ITERATIVE_SCHUR;
+    case BundleLinearSolver::Automatic: break;
+  }
   if (free_keyframes <= kMaxKeyframesForDenseSchur) return ceres::DENSE_SCHUR;
   return have_sparse ? ceres::SPARSE_SCHUR : ceres::ITERATIVE_SCHUR;
+}
+
+// Ceres' losses act on the squared norm s: Huber(a) is quadratic up to
+// s = a^2, Cauchy(b) is b^2 log(1 + s / b^2).
+ceres::LossFunction* makeRobustLoss(const BundleOptions& options, double scale) {
+  if (!options.robust) return nullptr;
+  switch (options.robust_loss) {
+    case RobustLoss::Cauchy: return new ceres::CauchyLoss(scale);
+    case RobustLoss::Huber: break;
+  }
+  return new ceres::HuberLoss(scale);
 }
 
 }  // namespace
@@ -90,10 +107,8 @@ BundleResult bundleAdjust(const PinholeCamera& camera, double bf, BundleProblem&
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem ceres_problem(problem_options);
-  ceres::LossFunctionWrapper loss_mono(options.robust ? new ceres::HuberLoss(options.huber_mono) : nullptr,
-                                       ceres::TAKE_OWNERSHIP);
-  ceres::LossFunctionWrapper loss_stereo(options.robust ? new ceres::HuberLoss(options.huber_stereo) : nullptr,
-                                         ceres::TAKE_OWNERSHIP);
+  ceres::LossFunctionWrapper loss_mono(makeRobustLoss(options, options.huber_mono), ceres::TAKE_OWNERSHIP);
+  ceres::LossFunctionWrapper loss_stereo(makeRobustLoss(options, options.huber_stereo), ceres::TAKE_OWNERSHIP);
   PoseManifold pose_manifold;
   PoseFixedTranslationNormManifold fixed_norm_manifold;
 
@@ -142,8 +157,11 @@ BundleResult bundleAdjust(const PinholeCamera& camera, double bf, BundleProblem&
   AbortCallback abort_callback(options.abort_flag);
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type =
-      chooseLinearSolver(free_keyframes, free_points, &solver_options.sparse_linear_algebra_library_type);
+      chooseLinearSolver(options.linear_solver, free_keyframes, free_points,
+                         &solver_options.sparse_linear_algebra_library_type);
   solver_options.num_threads = options.num_threads;
+  // Schur-Jacobi preconditioning is the usual choice for bundle adjustment.
+  solver_options.preconditioner_type = ceres::SCHUR_JACOBI;
   solver_options.logging_type = ceres::SILENT;
   solver_options.callbacks.push_back(&abort_callback);
 

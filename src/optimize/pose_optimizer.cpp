@@ -14,7 +14,13 @@ namespace {
 struct PoseOnlyTerm {
   std::unique_ptr<PoseOnlyReprojectionCost<2>> mono;
   std::unique_ptr<PoseOnlyReprojectionCost<3>> stereo;
-  void setActive(bool active) { mono ? mono->setActive(active) : stereo->setActive(active); }
+  void setActive(bool active) {
+    if (mono) {
+      mono->setActive(active);
+    } else {
+      stereo->setActive(active);
+    }
+  }
 };
 
 }  // namespace
@@ -34,7 +40,7 @@ PoseOptimizationResult optimizePose(const PinholeCamera& camera, double bf, cons
 
   PoseParameters pose = poseToParameters(T_cw_initial);
   PoseOptimizationResult result;
-  result.inlier.assign(observations.size(), true);
+  result.inlier.assign(observations.size(), true);  // the first round uses every observation
 
   auto classify = [&]() {
     const SE3 T_cw = poseFromParameters(pose.data());
@@ -95,11 +101,16 @@ PoseOptimizationResult optimizePose(const PinholeCamera& camera, double bf, cons
       huber_mono.Reset(nullptr, ceres::TAKE_OWNERSHIP);
       huber_stereo.Reset(nullptr, ceres::TAKE_OWNERSHIP);
     }
+    const std::vector<bool> used_in_this_round = result.inlier;
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &problem, &summary);
     classify();
-    for (size_t i = 0; i < terms.size(); ++i) terms[i].setActive(result.inlier[i]);
     if (result.n_inliers < 10) break;  // too few left to refine further (ORB-SLAM stops here too)
+    // A converged round without the robust loss that keeps the same inliers
+    // leaves nothing for another round to do.
+    const bool converged = summary.termination_type == ceres::CONVERGENCE;
+    if (converged && round >= options.robust_rounds && result.inlier == used_in_this_round) break;
+    for (size_t i = 0; i < terms.size(); ++i) terms[i].setActive(result.inlier[i]);
   }
   result.T_cw = poseFromParameters(pose.data());
   return result;

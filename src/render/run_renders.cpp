@@ -171,14 +171,14 @@ std::vector<std::string> renderRunFolder(const std::string& run_dir_text, const 
     TrajectoryPlotInput input;
     const std::string groundtruth_path = resolveGroundTruth(report.groundtruth_file, run_dir);
     double computed_ate = -1.0;
+    std::vector<StampedPose> groundtruth;
     if (!groundtruth_path.empty()) {
-      const std::vector<StampedPose> groundtruth = readGroundTruth(groundtruth_path);
-      if (groundtruth.empty())
-        for (const auto& pose : estimate) input.estimate.push_back(pose.T_wc.t);
-      else
-        input = alignedTrajectory(estimate, groundtruth, report.mode == "mono", computed_ate);
+      groundtruth = readGroundTruth(groundtruth_path);
+    }
+    if (!groundtruth.empty()) {
+      input = alignedTrajectory(estimate, groundtruth, report.mode == "mono", computed_ate);
     } else {
-      spdlog::info("render: no groundtruth_file in report.json; plotting the estimate alone");
+      if (groundtruth_path.empty()) spdlog::info("render: no groundtruth_file in report.json; plotting the estimate alone");
       for (const auto& pose : estimate) input.estimate.push_back(pose.T_wc.t);
     }
     // The report's ATE is the official number; ours (same rule) stands in when it has none.

@@ -36,6 +36,17 @@ inline int hammingDistance(const cv::Mat& a_row, const cv::Mat& b_row) {
   return hammingDistance(a_row.ptr<std::uint8_t>(), b_row.ptr<std::uint8_t>());
 }
 
+// Nearest and second-nearest of `candidates` (row indices of `descriptors`) to
+// `descriptor`, for search-by-projection loops: built with POPCNT where the CPU
+// has it (see matcher.cpp), which the inline hammingDistance in a caller's
+// loop is not unless the whole build uses -mpopcnt. Ties keep the earlier
+// candidate. index = -1 when there is no candidate; second_index = -1 when only one.
+struct NearestTwo {
+  int index = -1, distance = 256;
+  int second_index = -1, second_distance = 256;
+};
+NearestTwo nearestTwo(const std::uint8_t* descriptor, const cv::Mat& descriptors, const std::vector<int>& candidates);
+
 // The features of one frame or keyframe as the matchers see them.
 struct FeatureView {
   const std::vector<cv::KeyPoint>& keypoints;  // octave (level) and angle are used; pt is not

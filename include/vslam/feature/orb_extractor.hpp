@@ -43,12 +43,18 @@ class OrbExtractor {
 
   explicit OrbExtractor(const OrbParams& params);
 
+  // Levels resized from the previous one (bilinear), sizes round(W / scale^l);
+  // also the blurred copies BRIEF samples. Accepts CV_8UC1 or BGR CV_8UC3;
+  // throws InputError for an empty image or another type.
   ImagePyramid buildPyramid(const cv::Mat& gray) const;
 
-  // Keypoints come back in level-0 pixel coordinates, with octave = pyramid
-  // level and angle in degrees; descriptors are rows of 32 bytes (CV_8U).
-  // `roi` (level-0 pixels) restricts where keypoints may lie (empty: the whole
-  // image); `n_features` < 0 means params().n_features.
+  // Keypoints come back in level-0 pixel coordinates (raw, i.e. still
+  // distorted), with octave = pyramid level, angle in degrees [0, 360),
+  // size = 31 * scale and response = FAST score; descriptors are rows of 32
+  // bytes (CV_8U) in the same order. `roi` (level-0 pixels) restricts where
+  // keypoints may lie (empty: the whole image) and only the ROI is scanned;
+  // `n_features` (< 0: params().n_features) is spread over the levels of the
+  // ROI like the whole-image quota. const and stateless: safe from several threads.
   void extract(const ImagePyramid& pyramid, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors,
                const cv::Rect& roi = cv::Rect(), int n_features = -1) const;
   void extract(const cv::Mat& gray, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) const {

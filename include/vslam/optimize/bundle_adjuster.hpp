@@ -50,6 +50,19 @@ struct BundleProblem {
   std::vector<BaObservation> observations;
 };
 
+enum class BundleLinearSolver {
+  Automatic,  // dense Schur up to 40 free keyframes, else sparse Schur (SuiteSparse or Eigen)
+  DenseSchur,
+  SparseSchur,
+  IterativeSchur,
+};
+
+// Loss of phase 1. Huber is ORB-SLAM's choice. Cauchy redescends: on short
+// tracks (3-4 observations) a gross outlier at the end of a track can pull
+// the point under Huber so that good observations fail the chi2 test instead;
+// Cauchy resists that better (see docs/OPTIMIZATION.md).
+enum class RobustLoss { Huber, Cauchy };
+
 struct BundleOptions {
   // Phase 1 runs with the robust loss (if `robust`). If `remove_outliers`, the
   // observations failing the chi2 test are then dropped and phase 2 runs
@@ -57,12 +70,16 @@ struct BundleOptions {
   int iterations_first = 5;
   int iterations_second = 10;
   bool robust = true;
+  RobustLoss robust_loss = RobustLoss::Huber;
   bool remove_outliers = true;
+  // Scale of the robust loss on the whitened residual norm (Huber's delta,
+  // Cauchy's b = delta^2).
   double huber_mono = std::sqrt(kChi2Mono);
   double huber_stereo = std::sqrt(kChi2Stereo);
   double chi2_mono = kChi2Mono;
   double chi2_stereo = kChi2Stereo;
   int num_threads = 1;
+  BundleLinearSolver linear_solver = BundleLinearSolver::Automatic;
   // Local Mapping sets this when a new keyframe arrives; the solver stops
   // after its current iteration, keeps the progress made, and skips phase 2.
   const std::atomic<bool>* abort_flag = nullptr;

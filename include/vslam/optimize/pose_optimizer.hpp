@@ -38,8 +38,11 @@ struct PoseOptimizationResult {
 // Each round optimises the pose over the observations currently classified as
 // inliers (all, in the first round), then reclassifies every observation by
 // chi2 < threshold with the point in front of the camera; an observation
-// dropped in one round comes back if its error falls. With fewer than 3
-// observations the pose is returned unchanged, only classified.
+// dropped in one round comes back if its error falls. Rounds stop early when
+// fewer than 10 inliers remain, or when a round without the robust loss
+// converged and left the classification unchanged (the next one would solve
+// the same problem).
+// With fewer than 3 observations the pose is returned unchanged, only classified.
 PoseOptimizationResult optimizePose(const PinholeCamera& camera, double bf, const SE3& T_cw_initial,
                                     const std::vector<Vec3>& points_w,
                                     const std::vector<Observation2D>& observations,

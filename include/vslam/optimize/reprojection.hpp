@@ -31,6 +31,10 @@ constexpr double kChi2Stereo = 7.815;  // 3 degrees of freedom
 // its residual and Jacobians are zero, and outlier classification rejects it.
 constexpr double kMinPositiveDepth = 1e-6;
 
+// RGB-D observations become stereo ones: the right-image coordinate a stereo
+// rig with the same bf would have measured for a keypoint at `depth`.
+inline double rightCoordinateFromDepth(double u, double depth, double bf) { return u - bf / depth; }
+
 constexpr int kPoseParameterSize = 7;
 using PoseParameters = std::array<double, kPoseParameterSize>;
 PoseParameters poseToParameters(const SE3& T_cw);

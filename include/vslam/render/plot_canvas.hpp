@@ -73,7 +73,7 @@ cv::Scalar viridisColour(double t);
 std::string toHersheyText(const std::string& utf8);
 
 enum class TextAnchor { Left, Centre, Right };
-// `baseline_left` is the text origin for Left; Centre and Right shift it.
+// `origin` is the left end of the baseline for Left; Centre and Right shift the text left.
 void drawText(cv::Mat& image, const std::string& text, cv::Point origin, double scale,
               const cv::Scalar& bgr, TextAnchor anchor = TextAnchor::Left, int thickness = 1);
 // Text on a filled box (for labels drawn over geometry).

@@ -10,7 +10,7 @@ namespace vslam {
 namespace {
 
 std::string writeFile(const std::string& name, const std::string& text) {
-  const auto path = test::scratchDir("config") / name;
+  const auto path = test::scratchDir("config_" + name) / name;
   std::ofstream(path) << text;
   return path.string();
 }

@@ -138,15 +138,16 @@ TEST_F(MapGraphTest, ReplaceMovesObservationsAndKeepsOneSlot) {
 }
 
 TEST_F(MapGraphTest, DescriptorIsTheMedoid) {
-  KeyFrame* a = map_.createKeyFrame(makeFrame(0, 10));
-  KeyFrame* b = map_.createKeyFrame(makeFrame(1, 10));
-  KeyFrame* c = map_.createKeyFrame(makeFrame(2, 10));
-  // Byte 0 values 0b0000, 0b0001, 0b0111 at keypoints 0, 1, 7: the middle one
-  // (index 1) has the smallest median distance to the others.
-  MapPoint* point = map_.createMapPoint(Vec3(0, 0, 5), a);
-  point->addObservation(a, 0);
-  point->addObservation(b, 1);
-  point->addObservation(c, 7);
+  // Byte 0 of keypoint i's descriptor is i. Observed descriptors 7, 25, 1, 97,
+  // 129: the one with byte 1 is 2 bits from 7, 25 and 97 and 1 from 129, so its
+  // median distance to the others (2) is the only smallest one.
+  const std::vector<int> keypoints = {7, 25, 1, 97, 129};
+  MapPoint* point = nullptr;
+  for (size_t k = 0; k < keypoints.size(); ++k) {
+    KeyFrame* kf = map_.createKeyFrame(makeFrame(static_cast<long>(k), 130));
+    if (!point) point = map_.createMapPoint(Vec3(0, 0, 5), kf);
+    point->addObservation(kf, keypoints[k]);
+  }
   point->updateDescriptor();
   EXPECT_EQ(point->descriptor().at<uint8_t>(0, 0), 1);
 }

@@ -63,7 +63,7 @@ RunFolder writeRunFolder(const std::string& scratch_name) {
     high = high.cwiseMax(q);
     groundtruth << 100.0 + 0.1 * i << " " << p.x() << " " << p.y() << " " << p.z() << " 0 0 0 1\n";
     trajectory << 100.005 + 0.1 * i << " " << q.x() << " " << q.y() << " " << q.z() << " 0 0 0 1\n";
-    if (i % 10 == 0) keyframes << i << " " << 100.005 + 0.1 * i << " " << q.x() << " " << q.y() << " " << q.z() << " 0 0 0 1\n";
+    if (i % 10 == 0) keyframes << 100.005 + 0.1 * i << " " << q.x() << " " << q.y() << " " << q.z() << " 0 0 0 1\n";
   }
   // The object box encloses everything else, so a top view of the map is the
   // top view fitted to the box alone.

@@ -38,8 +38,8 @@ int KeyFrame::trackedMapPoints(int min_observations) const {
   return count;
 }
 
-std::set<MapPoint*> KeyFrame::goodMapPoints() const {
-  std::set<MapPoint*> result;
+MapPointSet KeyFrame::goodMapPoints() const {
+  MapPointSet result;
   for (MapPoint* point : map_points_)
     if (point && !point->isBad()) result.insert(point);
   return result;
@@ -71,7 +71,7 @@ void KeyFrame::updateOrder() {
 }
 
 void KeyFrame::updateConnections() {
-  std::map<KeyFrame*, int> counts;
+  KeyFrameMap<int> counts;
   for (MapPoint* point : map_points_) {
     if (!point || point->isBad()) continue;
     for (const auto& [keyframe, index] : point->observations())
@@ -144,9 +144,9 @@ void KeyFrame::setBad() {
 
   // Reattach each child to the candidate parent it shares most points with:
   // the grandparent or an already reattached sibling.
-  std::set<KeyFrame*> parent_candidates;
+  KeyFrameSet parent_candidates;
   if (parent_) parent_candidates.insert(parent_);
-  std::set<KeyFrame*> orphans = children_;
+  KeyFrameSet orphans = children_;
   while (!orphans.empty()) {
     KeyFrame* best_child = nullptr;
     KeyFrame* best_parent = nullptr;

@@ -298,7 +298,7 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
         kf->ba_fixed_for_kf = keyframe->id();
         fixed.push_back(kf);
       }
-    std::map<KeyFrame*, int> slot;
+    KeyFrameMap<int> slot;
     for (KeyFrame* kf : local) {
       slot[kf] = static_cast<int>(problem.keyframes.size());
       // The first keyframe anchors the gauge.

@@ -304,7 +304,7 @@ bool Tracking::trackReferenceKeyFrame(Frame& frame) {
 
 void Tracking::updateLocalMap(Frame& frame) {
   // Keyframes that see the frame's points, voting by how many they see.
-  std::map<KeyFrame*, int> votes;
+  KeyFrameMap<int> votes;
   for (size_t i = 0; i < frame.size(); ++i) {
     MapPoint* point = frame.map_points[i];
     if (!point) continue;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "vslam/map/frame.hpp"
+#include "vslam/map/id_order.hpp"
 
 namespace vslam {
 
@@ -46,7 +47,7 @@ class KeyFrame {
   void eraseMapPoint(MapPoint* point);
   // Good map points observed by at least `min_observations` keyframes.
   int trackedMapPoints(int min_observations) const;
-  std::set<MapPoint*> goodMapPoints() const;
+  MapPointSet goodMapPoints() const;
 
   // Covisibility graph: weight = number of shared map points.
   void updateConnections();
@@ -59,10 +60,10 @@ class KeyFrame {
 
   // Spanning tree (strongest covisibility parent) and loop edges.
   KeyFrame* parent() const { return parent_; }
-  const std::set<KeyFrame*>& children() const { return children_; }
+  const KeyFrameSet& children() const { return children_; }
   void changeParent(KeyFrame* parent);
   void addLoopEdge(KeyFrame* other) { loop_edges_.insert(other); }
-  const std::set<KeyFrame*>& loopEdges() const { return loop_edges_; }
+  const KeyFrameSet& loopEdges() const { return loop_edges_; }
 
   // Removes the keyframe from the graph (reparenting its children) and detaches its points.
   void setBad();
@@ -91,12 +92,12 @@ class KeyFrame {
   const ScalePyramid* pyramid_;
   SE3 T_cw_;
   std::vector<MapPoint*> map_points_;
-  std::map<KeyFrame*, int> connection_weights_;
+  KeyFrameMap<int> connection_weights_;
   std::vector<KeyFrame*> ordered_covisibles_;
   std::vector<int> ordered_weights_;
   KeyFrame* parent_ = nullptr;
-  std::set<KeyFrame*> children_;
-  std::set<KeyFrame*> loop_edges_;
+  KeyFrameSet children_;
+  KeyFrameSet loop_edges_;
   SE3 T_c_parent_;
   bool first_connection_ = true;
   bool bad_ = false;

@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 
 #include "vslam/core/types.hpp"
+#include "vslam/map/id_order.hpp"
 
 namespace vslam {
 
@@ -25,7 +26,7 @@ class MapPoint {
   bool isBad() const { return bad_; }
 
   // Observations: keyframe -> keypoint index.
-  const std::map<KeyFrame*, int>& observations() const { return observations_; }
+  const KeyFrameMap<int>& observations() const { return observations_; }
   int observationCount() const { return static_cast<int>(observations_.size()); }
   void addObservation(KeyFrame* keyframe, int keypoint);
   // Removes one observation; the point turns bad when fewer than 2 remain.
@@ -74,7 +75,7 @@ class MapPoint {
   long id_;
   long first_keyframe_id_;
   Vec3 position_w_;
-  std::map<KeyFrame*, int> observations_;
+  KeyFrameMap<int> observations_;
   KeyFrame* reference_;
   cv::Mat descriptor_;
   Vec3 normal_ = Vec3::Zero();

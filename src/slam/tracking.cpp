@@ -407,7 +407,10 @@ bool Tracking::needNewKeyFrame(const Frame& frame) const {
   // Local Mapping must be ready to take it; otherwise ask it to wrap up its BA.
   if (local_mapping_.acceptsKeyFrames()) return true;
   local_mapping_.interruptBundleAdjustment();
-  return deterministic_;  // in deterministic mode the mapper always catches up before the next frame
+  if (deterministic_) return true;  // the mapper always catches up before the next frame
+  // Weak tracking cannot wait for an idle mapper (fast forward motion loses the
+  // map within a few frames): queue one keyframe behind the one in work.
+  return matches_inliers_ < params.min_tracked_points && local_mapping_.queuedKeyFrames() < 1;
 }
 
 void Tracking::createKeyFrame(Frame& frame) {

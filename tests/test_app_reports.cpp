@@ -90,6 +90,12 @@ TEST(RunRenders, NoRenderWritesNoPng) {
   for (const char* png : kPngs) EXPECT_FALSE(fs::exists(out / png)) << png;
 }
 
+TEST(RunRenders, HelpDocumentsNoRender) {
+  const fs::path dir = test::scratchDir("reports_run_help");
+  ASSERT_EQ(runFromRoot(vslamBinary() + " run --help", dir), 0);
+  EXPECT_TRUE(contains(slurp(dir / "stdout"), "--no-render")) << slurp(dir / "stdout");
+}
+
 TEST(RunRenders, RenderFailureIsAWarningAndKeepsTheRun) {
   const fs::path dir = test::scratchDir("reports_render_fails");
   const fs::path out = dir / "run";

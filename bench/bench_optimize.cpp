@@ -1,9 +1,12 @@
 // Timings of the optimize module on synthetic problems shaped like the real
 // ones. Run with:
 //   build/bench/bench_optimize --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
-// A recorded Local Mapping problem (saveBundleProblem) is benchmarked too when
-// VSLAM_BUNDLE_PROBLEM names its file.
+// A recorded Local Mapping problem (saveBundleProblem) is benchmarked too:
+// VSLAM_BUNDLE_PROBLEM names its file, else bench/data/local_ba_fr1_xyz.txt
+// (recorded with VSLAM_RECORD_BA, see docs/REPORTS.md) is used.
 #include <cstdlib>
+#include <filesystem>
+#include <string>
 #include <random>
 
 #include <benchmark/benchmark.h>
@@ -108,12 +111,17 @@ BENCHMARK_CAPTURE(BM_LocalBundleAdjustment, iterative_schur, BundleLinearSolver:
     ->Args({2000, 20})->Unit(benchmark::kMillisecond);
 
 void BM_RecordedBundleAdjustment(benchmark::State& state) {
-  const char* path = std::getenv("VSLAM_BUNDLE_PROBLEM");
-  if (!path) {
-    state.SkipWithError("set VSLAM_BUNDLE_PROBLEM to a file written by saveBundleProblem");
+  const char* env_path = std::getenv("VSLAM_BUNDLE_PROBLEM");
+  const std::string path =
+      env_path ? std::string(env_path) : std::string(VSLAM_SOURCE_DIR) + "/bench/data/local_ba_fr1_xyz.txt";
+  if (!std::filesystem::exists(path)) {
+    state.SkipWithError((path + " not found: set VSLAM_BUNDLE_PROBLEM to a file written by saveBundleProblem").c_str());
     return;
   }
   const RecordedBundleProblem recorded = loadBundleProblem(path);
+  state.SetLabel(std::to_string(recorded.problem.keyframes.size()) + " keyframes, " +
+                 std::to_string(recorded.problem.points.size()) + " points, " +
+                 std::to_string(recorded.problem.observations.size()) + " observations");
   runBundle(state, recorded.camera, recorded.bf, recorded.problem, BundleLinearSolver::Automatic);
 }
 BENCHMARK(BM_RecordedBundleAdjustment)->Unit(benchmark::kMillisecond);

@@ -19,7 +19,7 @@ done
 packages=(build-essential cmake pkg-config curl
           libopencv-dev libeigen3-dev libceres-dev libyaml-cpp-dev libcli11-dev
           libspdlog-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev libosmesa6-dev
-          jq curl ca-certificates)
+          jq curl ca-certificates parallel)
 
 if [ "$skip_install" = 0 ]; then
   missing=()

@@ -138,6 +138,8 @@ Command addRunCommand(CLI::App& app) {
   cli->add_option("--max-frames", options->max_frames, "Process only the first N frames; 0 = all")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  cli->add_flag("--no-render", options->pipeline.no_render,
+                "Write no PNG figures at the end (default: render them into the output folder, as `vslam render`)");
   cli->add_flag("--info", options->info_only,
                 "Only find the sequence and print what it holds (frames, camera, ground truth); run nothing "
                 "(default: off)");

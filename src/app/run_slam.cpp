@@ -17,8 +17,10 @@
 #include "vslam/core/error.hpp"
 
 #include "vslam/eval/ate.hpp"
+#include "vslam/eval/rpe.hpp"
 #include "vslam/io/ply.hpp"
 #include "vslam/io/trajectory_io.hpp"
+#include "vslam/render/run_renders.hpp"
 #include "vslam/slam/system.hpp"
 
 namespace vslam::app {
@@ -121,6 +123,39 @@ nlohmann::json ateJson(const std::vector<StampedPose>& estimate, const Sequence&
   return toJson(result);
 }
 
+// RPE over 1 s intervals (m/s, deg/s) for TUM and KITTI alike: KITTI frames
+// carry times.txt's timestamps, and the usual 100 m intervals are longer than
+// many runs. A monocular estimate is scaled by its ATE Sim(3) scale.
+nlohmann::json rpeJson(const std::vector<StampedPose>& estimate, const Sequence& sequence, double scale) {
+  RpeOptions options;
+  options.delta = 1.0;
+  options.association = Association::Timestamp;
+  options.scale = scale;
+  nlohmann::json json = toJson(computeRpe(estimate, sequence.groundtruth, options));
+  json["delta_s"] = options.delta;
+  return json;
+}
+
+// The ground truth over the run's time span (with a little margin), in TUM
+// format, so that the run folder is evaluated and rendered on its own.
+void writeRunGroundTruth(const std::string& path, const Sequence& sequence, double first_t, double last_t) {
+  constexpr double kMargin = 0.05;  // s
+  std::vector<StampedPose> span;
+  for (const StampedPose& pose : sequence.groundtruth)
+    if (pose.timestamp >= first_t - kMargin && pose.timestamp <= last_t + kMargin) span.push_back(pose);
+  writeTumTrajectory(path, span);
+}
+
+// A failure here is a warning: the run's other outputs are already written.
+void renderRun(const std::string& out_dir) {
+  try {
+    for (const std::string& path : renderRunFolder(out_dir, out_dir)) spdlog::info("render: wrote {}", path);
+  } catch (const std::exception& e) {
+    spdlog::warn("render failed ({}); the run's other outputs are complete; retry with `vslam render {}`", e.what(),
+                 out_dir);
+  }
+}
+
 }  // namespace
 
 int runSlam(const Sequence& sequence, const RunOptions& options) {
@@ -190,11 +225,19 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   report["local_bundle_adjustments"] = stats.local_bundle_adjustments;
   report["culled_keyframes"] = stats.culled_keyframes;
   report["groundtruth_file"] = sequence.groundtruth_path;
+  if (sequence.hasGroundTruth() && end > begin) {
+    writeRunGroundTruth(out_dir + "/groundtruth.txt", sequence, sequence.frames[begin].timestamp,
+                        sequence.frames[end - 1].timestamp);
+    report["groundtruth_source"] = sequence.groundtruth_path;
+    report["groundtruth_file"] = "groundtruth.txt";  // in the run folder
+  }
   if (sequence.hasGroundTruth() && !keyframes.empty()) {
     report["ate"]["keyframes"] = ateJson(keyframes, sequence, mono);
     report["ate"]["frames"] = ateJson(trajectory, sequence, mono);
+    report["rpe"]["frames"] = rpeJson(trajectory, sequence, report["ate"]["frames"]["scale"].get<double>());
   } else {
     report["ate"] = nullptr;
+    report["rpe"] = nullptr;
   }
   nlohmann::json stage_ms;
   for (const auto& [stage, s] : system.timer().summary())
@@ -204,6 +247,7 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   report["fps"] = wall_s > 0 ? stats.frames / wall_s : 0.0;
   report["peak_rss_mb"] = peakRssMb();
   std::ofstream(out_dir + "/report.json") << report.dump(2) << "\n";
+  if (!options.no_render) renderRun(out_dir);
 
   // Summary on stdout.
   std::cout << "sequence: " << sequence.name << " (" << options.mode << ")\n";

@@ -13,6 +13,7 @@ struct RunOptions {
   bool deterministic = false;
   int max_frames = 0;         // 0 = all
   int start_frame = 0;
+  bool no_render = false;     // true: no PNGs at the end (renderRunFolder)
 };
 
 // Returns the process exit status.

@@ -48,12 +48,16 @@ RunReport readReport(const std::string& path) {
   if (json.contains("mode") && json["mode"].is_string()) report.mode = json["mode"];
   if (json.contains("groundtruth_file") && json["groundtruth_file"].is_string())
     report.groundtruth_file = json["groundtruth_file"];
-  // "ate" is the RMSE in metres, or an object holding it as "rmse" / "rmse_m".
+  // "ate" is the RMSE in metres, or an object holding it as "rmse" / "rmse_m",
+  // or `vslam run`'s {"frames": {"rmse_m"}, "keyframes": {...}} (the frames' one).
   if (json.contains("ate")) {
     const nlohmann::json& ate = json["ate"];
     if (ate.is_number()) report.ate_rmse_m = ate;
+    const nlohmann::json* holder = &ate;
+    if (ate.is_object() && ate.contains("frames") && ate["frames"].is_object()) holder = &ate["frames"];
     for (const char* key : {"rmse", "rmse_m"})
-      if (ate.is_object() && ate.contains(key) && ate[key].is_number()) report.ate_rmse_m = ate[key];
+      if (holder->is_object() && holder->contains(key) && (*holder)[key].is_number())
+        report.ate_rmse_m = (*holder)[key];
   }
   return report;
 }
@@ -71,12 +75,13 @@ std::string titlePrefix(const RunReport& report) {
   return report.mode.empty() ? report.sequence : report.sequence + " — " + report.mode;
 }
 
-// Where report.json's groundtruth_file points: as written (absolute, or
-// relative to the working directory), else relative to the run folder.
+// Where report.json's groundtruth_file points: an absolute path as written; a
+// relative one in the run folder (`vslam run` writes groundtruth.txt there),
+// else relative to the working directory.
 std::string resolveGroundTruth(const std::string& file, const fs::path& run_dir) {
-  if (file.empty()) return "";
-  if (fs::path(file).is_absolute() || fs::exists(file)) return file;
-  return (run_dir / file).string();
+  if (file.empty() || fs::path(file).is_absolute()) return file;
+  const fs::path in_run_dir = run_dir / file;
+  return fs::exists(in_run_dir) || !fs::exists(file) ? in_run_dir.string() : file;
 }
 
 // The estimate aligned to the ground truth (the ATE's alignment: Sim(3) for

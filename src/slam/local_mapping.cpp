@@ -1,10 +1,13 @@
 #include "vslam/slam/local_mapping.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <set>
+#include <string>
 
 #include <spdlog/spdlog.h>
 
+#include "vslam/core/error.hpp"
 #include "vslam/geometry/triangulation.hpp"
 #include "vslam/optimize/bundle_adjuster.hpp"
 #include "vslam/slam/map_matching.hpp"
@@ -20,7 +23,32 @@ constexpr double kMinParallaxCos = 0.9998;
 }  // namespace
 
 LocalMapping::LocalMapping(const Config& config, Map& map, StageTimer* timer)
-    : config_(config), map_(map), timer_(timer) {}
+    : config_(config), map_(map), timer_(timer) {
+  if (const char* path = std::getenv("VSLAM_RECORD_BA")) record_ba_path_ = path;
+  if (const char* count = std::getenv("VSLAM_RECORD_BA_MIN_KEYFRAMES")) {
+    const int parsed = std::atoi(count);
+    if (parsed <= 0) throw InputError("VSLAM_RECORD_BA_MIN_KEYFRAMES must be a positive integer, not '" +
+                                      std::string(count) + "'");
+    record_ba_min_keyframes_ = static_cast<size_t>(parsed);
+  }
+}
+
+// Saves one problem, then switches itself off (the path is cleared).
+void LocalMapping::maybeRecordBundleProblem(const PinholeCamera& camera, const BundleProblem& problem) {
+  size_t free_keyframes = 0;
+  for (const auto& keyframe : problem.keyframes)
+    if (!keyframe.fixed) ++free_keyframes;
+  if (free_keyframes < record_ba_min_keyframes_) return;
+  try {
+    saveBundleProblem(record_ba_path_, camera, 0.0, problem);
+    spdlog::info("recorded a local BA problem ({} keyframes, {} free, {} points, {} observations) in {}",
+                 problem.keyframes.size(), free_keyframes, problem.points.size(), problem.observations.size(),
+                 record_ba_path_);
+  } catch (const std::exception& e) {
+    spdlog::warn("VSLAM_RECORD_BA: {}", e.what());  // a debugging aid: never stops the run
+  }
+  record_ba_path_.clear();
+}
 
 LocalMapping::~LocalMapping() { finish(); }
 
@@ -326,6 +354,7 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
   options.iterations_first = 5;
   options.iterations_second = config_.mapping.local_ba_iterations;
   options.abort_flag = &abort_ba_;
+  if (!record_ba_path_.empty()) maybeRecordBundleProblem(keyframe->camera(), problem);
   const BundleResult result = bundleAdjust(keyframe->camera(), 0.0, problem, options);
   ++local_ba_count_;
 

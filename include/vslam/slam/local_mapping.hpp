@@ -7,11 +7,13 @@
 #include <deque>
 #include <list>
 #include <mutex>
+#include <string>
 #include <thread>
 
 #include "vslam/core/config.hpp"
 #include "vslam/core/stage_timer.hpp"
 #include "vslam/map/map.hpp"
+#include "vslam/optimize/bundle_adjuster.hpp"
 
 namespace vslam {
 
@@ -50,6 +52,7 @@ class LocalMapping {
   void fuseDuplicates(KeyFrame* keyframe);
   void localBundleAdjustment(KeyFrame* keyframe);
   void cullRedundantKeyFrames(KeyFrame* keyframe);
+  void maybeRecordBundleProblem(const PinholeCamera& camera, const BundleProblem& problem);
 
   Config config_;
   Map& map_;
@@ -67,6 +70,13 @@ class LocalMapping {
   std::list<MapPoint*> recent_points_;  // touched only by the mapping step
   int local_ba_count_ = 0;
   int culled_keyframes_ = 0;
+
+  // $VSLAM_RECORD_BA=path: the first local BA problem with at least
+  // $VSLAM_RECORD_BA_MIN_KEYFRAMES (default 10) free keyframes is saved there
+  // (saveBundleProblem, before optimisation) for bench_optimize; read once at
+  // construction, empty = off.
+  std::string record_ba_path_;
+  size_t record_ba_min_keyframes_ = 10;
 };
 
 }  // namespace vslam

@@ -426,6 +426,14 @@ TwoViewResult TwoViewInitializer::initialize(const std::vector<Vec2>& pts_ref, c
                             formatDeg(params_.min_parallax_deg) + " deg)";
     return result;
   }
+  // The motion must explain (nearly) all of its model's inliers; a wrong F or
+  // H decomposition leaves many of them behind a camera or off their rays.
+  const int n_consistent = static_cast<int>(best.consistent_parallax_deg.size());
+  if (n_consistent < params_.min_consistent_fraction * result.n_model_inliers) {
+    result.failure_reason = "motion from " + model_name + " explains only " + std::to_string(n_consistent) + " of " +
+                            std::to_string(result.n_model_inliers) + " inliers";
+    return result;
+  }
   if (second_good > params_.max_second_best_ratio * best.n_good) {
     result.failure_reason = "ambiguous motion from " + model_name + " (runner-up triangulates " +
                             std::to_string(second_good) + " of the best's " + std::to_string(best.n_good) + ")";

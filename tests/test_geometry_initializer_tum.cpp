@@ -1,6 +1,14 @@
 // The two-view initializer on real images: two frames of TUM fr1_xyz, matched
 // with OpenCV's ORB (only to produce test input), against the motion-capture
 // ground truth.
+//
+// Two fixed pairs, one taken through F (40-55) and one through H (420-432).
+// They are not typical: over 117 pairs (every 20th frame, 10/12/15 apart) the
+// initializer accepts 44, and 33 of those are within 1.5 deg (median 0.85 deg,
+// worst 4.5 deg); OpenCV's 5-point RANSAC on the same matches is within 1.5 deg
+// on 57 of 117 (median 1.7 deg). Rejection is the normal outcome at this
+// baseline (desk scene, near-planar, 2-8 deg of parallax): tracking retries on
+// the next frame. See docs/GEOMETRY.md.
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -130,7 +138,7 @@ double angleDeg(const Mat3& R_a, const Mat3& R_b) {
 }
 
 TEST(GeometryInitializerTum, Fr1XyzRotationAgreesWithGroundTruth) {
-  for (const auto& [ref_index, cur_index] : {std::pair{420, 432}, std::pair{660, 672}}) {
+  for (const auto& [ref_index, cur_index] : {std::pair{40, 55}, std::pair{420, 432}}) {
     const PairOutcome outcome = initializeFromPair(ref_index, cur_index);
     const TwoViewResult& result = outcome.result;
     ASSERT_TRUE(result.success) << "frames " << ref_index << "-" << cur_index << ": " << result.failure_reason;

@@ -458,11 +458,13 @@ TwoViewResult TwoViewInitializer::initialize(const std::vector<Vec2>& pts_ref, c
   const auto sets = drawMinimalSets(n, std::max(1, params_.ransac_iterations), seed_);
   auto [H, score_h] = ransac(matches, sets, computeHomography, scoreHomography);
   const Mat3 K = K_;
-  const auto estimate_f = [&K](const std::vector<Vec2>& ref, const std::vector<Vec2>& cur) {
+  const bool calibrated = params_.score_calibrated_f;
+  const auto estimate_f = [&K, calibrated](const std::vector<Vec2>& ref, const std::vector<Vec2>& cur) {
     // Score F as the calibrated motion it implies: on near-planar scenes the
     // 8-point F is poorly constrained and its free directions fit noise, so
     // that raw F wins inliers that no camera motion explains.
-    return nearestCalibratedFundamental(computeFundamental(ref, cur), K);
+    const Mat3 F = computeFundamental(ref, cur);
+    return calibrated ? nearestCalibratedFundamental(F, K) : F;
   };
   auto [F, score_f] = ransac(matches, sets, estimate_f, scoreFundamental);
   result.score_h = score_h.score;

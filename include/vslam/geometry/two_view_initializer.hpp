@@ -26,6 +26,8 @@ struct TwoViewResult {
   int n_triangulated = 0;
   double median_parallax_deg = 0;  // over the triangulated points of the chosen motion
   std::string failure_reason;      // why it failed (for the log); empty on success
+  // On failure the other fields still describe the best attempt, for logging;
+  // nothing in them may be used to build a map.
 };
 
 class TwoViewInitializer {

@@ -92,6 +92,40 @@ TEST(GeometrySim3, FixedScaleStaysAtOne) {
   EXPECT_FALSE(rigid_on_scaled.success);
 }
 
+TEST(GeometrySim3, ReprojectionRefinementBeatsTheThreeDimensionalFitUnderDepthNoise) {
+  // Exact pixels, map-point depths off by up to 5 % (as triangulated depths
+  // are): the 3D fit absorbs the depth errors, the reprojection refinement
+  // does not care about them.
+  const Sim3 S = trueSim3(1.7);
+  std::vector<bool> is_outlier;
+  Sim3Correspondences m = makeSim3Scene(S, 100, 0.2, 6, is_outlier);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> depth_error(0.95, 1.05);
+  for (size_t i = 0; i < m.points_1.size(); ++i) {
+    m.points_1[i] *= depth_error(rng);
+    m.points_2[i] *= depth_error(rng);
+  }
+  Sim3SolverParams params;
+  params.refine_reprojection = false;
+  const Sim3Result fit_3d = solveSim3Ransac(m, test::syntheticK(), test::syntheticK(), params, 0);
+  params.refine_reprojection = true;
+  const Sim3Result refined = solveSim3Ransac(m, test::syntheticK(), test::syntheticK(), params, 0);
+  ASSERT_TRUE(fit_3d.success);
+  ASSERT_TRUE(refined.success);
+  const double rotation_3d = test::rotationAngle(fit_3d.S12.R, S.R);
+  const double rotation_refined = test::rotationAngle(refined.S12.R, S.R);
+  std::cout << "rotation error: 3D fit " << rotation_3d * 180 / M_PI << " deg, refined "
+            << rotation_refined * 180 / M_PI << " deg; scale " << fit_3d.S12.s << " / " << refined.S12.s << "; inliers "
+            << fit_3d.n_inliers << " / " << refined.n_inliers << "\n";
+  EXPECT_LT(rotation_refined, 0.5 * rotation_3d);
+  EXPECT_LT(rotation_refined, 0.1 * M_PI / 180);
+  EXPECT_NEAR(refined.S12.s, 1.7, 0.02 * 1.7);
+  EXPECT_EQ(refined.n_inliers, 80);  // every true match, where the 3D fit loses some
+  for (size_t i = 0; i < is_outlier.size(); ++i) {
+    if (is_outlier[i]) EXPECT_FALSE(refined.inliers[i]) << i;
+  }
+}
+
 TEST(GeometrySim3, DeterministicForASeed) {
   std::vector<bool> is_outlier;
   const Sim3Correspondences m = makeSim3Scene(trueSim3(0.6), 80, 0.4, 5, is_outlier);

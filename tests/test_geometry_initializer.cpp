@@ -112,6 +112,25 @@ TEST(GeometryInitializer, PlanarSceneWithHalfPixelNoise) {
   EXPECT_EQ(structure.outliers_triangulated, 0);
 }
 
+TEST(GeometryInitializer, CalibratedFScoringAndNoRefinementAlsoWork) {
+  InitializerParams params;
+  params.score_calibrated_f = true;
+  params.refine_motion = false;
+  const TwoViewInitializer initializer(test::syntheticK(), params, 0);
+  const auto general = test::makeDepthScene(generalMotion(), 300, 0.0, 0.1, 1);
+  const TwoViewResult f_result = initializer.initialize(general.px_ref, general.px_cur);
+  ASSERT_TRUE(f_result.success) << f_result.failure_reason;
+  EXPECT_FALSE(f_result.used_homography);
+  EXPECT_LT(test::rotationAngle(f_result.T_cur_ref.R, general.T_cur_ref.R), 1e-6);
+  EXPECT_LT(test::angleBetween(f_result.T_cur_ref.t, general.T_cur_ref.t), 1e-6);
+  const SE3 motion(test::rotationDeg(3.0, Vec3(0.1, 1.0, -0.1)), Vec3(0.3, 0.05, 0.05));
+  const auto plane = test::makePlanarScene(motion, Vec3(0.1, -0.3, 1.0).normalized(), 2.0, 300, 0.0, 0.1, 3);
+  const TwoViewResult h_result = initializer.initialize(plane.px_ref, plane.px_cur);
+  ASSERT_TRUE(h_result.success) << h_result.failure_reason;
+  EXPECT_TRUE(h_result.used_homography);
+  EXPECT_LT(test::rotationAngle(h_result.T_cur_ref.R, plane.T_cur_ref.R), 1e-6);
+}
+
 TEST(GeometryInitializer, PureRotationFailsForLackOfParallax) {
   const SE3 rotation_only(test::rotationDeg(5.0, Vec3(0.2, 1.0, 0.0)), Vec3::Zero());
   for (const double noise : {0.0, 0.5}) {

@@ -9,6 +9,8 @@
 #include <sstream>
 
 #include <Eigen/LU>
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
 #include <Eigen/SVD>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
@@ -196,6 +198,77 @@ std::pair<Mat3, ModelScore> ransac(const Matches& m, const std::vector<std::arra
   return {best_model, std::move(best)};
 }
 
+// Sampson distance (pixels, divided by sigma) of a match to the epipolar
+// geometry of the motion (rotation as angle-axis, unit translation).
+struct SampsonResidual {
+  SampsonResidual(const Vec3& ray_ref, const Vec3& ray_cur, const Mat3& K, double inv_sigma)
+      : ray_ref(ray_ref), ray_cur(ray_cur), K(K), inv_sigma(inv_sigma) {}
+
+  template <typename T>
+  bool operator()(const T* angle_axis, const T* translation, T* residual) const {
+    // E = [t]x R on normalised rays; the gradients are taken in pixels (through
+    // K) so that the residual has the unit of the thresholds.
+    T R[9];
+    ceres::AngleAxisToRotationMatrix(angle_axis, ceres::RowMajorAdapter3x3(R));
+    Eigen::Matrix<T, 3, 3> rotation;
+    rotation << R[0], R[1], R[2], R[3], R[4], R[5], R[6], R[7], R[8];
+    Eigen::Matrix<T, 3, 3> t_cross;
+    t_cross << T(0), -translation[2], translation[1], translation[2], T(0), -translation[0], -translation[1],
+        translation[0], T(0);
+    const Eigen::Matrix<T, 3, 3> K_inv = K.inverse().cast<T>();
+    const Eigen::Matrix<T, 3, 3> F = K_inv.transpose() * t_cross * rotation * K_inv;
+    const Eigen::Matrix<T, 3, 1> x_ref = (K * ray_ref).cast<T>();
+    const Eigen::Matrix<T, 3, 1> x_cur = (K * ray_cur).cast<T>();
+    const Eigen::Matrix<T, 3, 1> line_cur = F * x_ref;
+    const Eigen::Matrix<T, 3, 1> line_ref = F.transpose() * x_cur;
+    const T algebraic = x_cur.dot(line_cur);
+    const T gradient2 = line_cur(0) * line_cur(0) + line_cur(1) * line_cur(1) + line_ref(0) * line_ref(0) +
+                        line_ref(1) * line_ref(1);
+    residual[0] = T(inv_sigma) * algebraic / sqrt(gradient2 + T(1e-300));
+    return true;
+  }
+
+  Vec3 ray_ref, ray_cur;
+  Mat3 K;
+  double inv_sigma;
+};
+
+// Gauss-Newton on the Sampson distances of the given matches: the linear
+// 8-point/DLT estimates minimise an algebraic error, this minimises (to first
+// order) the geometric one, over the 5 degrees of freedom of a calibrated
+// motion. Huber-robust at the F inlier bound.
+SE3 refineMotion(const SE3& initial, const Mat3& K, const Matches& m, const std::vector<bool>& use) {
+  double angle_axis[3];
+  double translation[3] = {initial.t.x(), initial.t.y(), initial.t.z()};
+  const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> R_row = initial.R;
+  ceres::RotationMatrixToAngleAxis(ceres::RowMajorAdapter3x3(R_row.data()), angle_axis);
+  ceres::Problem problem;
+  const Mat3 K_inv = K.inverse();
+  int n_used = 0;
+  for (size_t i = 0; i < m.size(); ++i) {
+    if (!use[i]) continue;
+    const double inv_sigma = std::sqrt(std::min(m.inv_sigma2_ref[i], m.inv_sigma2_cur[i]));
+    auto* cost = new ceres::AutoDiffCostFunction<SampsonResidual, 1, 3, 3>(
+        new SampsonResidual(K_inv * m.ref[i].homogeneous(), K_inv * m.cur[i].homogeneous(), K, inv_sigma));
+    problem.AddResidualBlock(cost, new ceres::HuberLoss(std::sqrt(kChi2_1dof)), angle_axis, translation);
+    ++n_used;
+  }
+  if (n_used < kMinimalSetSize || initial.t.norm() == 0) return initial;
+  problem.SetManifold(translation, new ceres::SphereManifold<3>());
+  ceres::Solver::Options options;
+  options.max_num_iterations = 20;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  if (!summary.IsSolutionUsable()) return initial;
+  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> R_refined;
+  ceres::AngleAxisToRotationMatrix(angle_axis, ceres::RowMajorAdapter3x3(R_refined.data()));
+  const Vec3 t_refined(translation[0], translation[1], translation[2]);
+  if (!R_refined.allFinite() || !t_refined.allFinite()) return initial;
+  return SE3(R_refined, t_refined.normalized());
+}
+
 // Triangulation of the inlier matches under one motion hypothesis.
 struct MotionCheck {
   SE3 T_cur_ref;
@@ -296,6 +369,16 @@ Mat3 computeFundamental(const std::vector<Vec2>& p1, const std::vector<Vec2>& p2
   return F / F.norm();
 }
 
+Mat3 nearestCalibratedFundamental(const Mat3& F, const Mat3& K) {
+  const Mat3 E = K.transpose() * F * K;
+  const Eigen::JacobiSVD<Mat3> svd(E, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Vec3 essential_singular(1, 1, 0);
+  const Mat3 E_projected = svd.matrixU() * essential_singular.asDiagonal() * svd.matrixV().transpose();
+  const Mat3 K_inv = K.inverse();
+  const Mat3 F_calibrated = K_inv.transpose() * E_projected * K_inv;
+  return F_calibrated / F_calibrated.norm();
+}
+
 std::vector<SE3> motionsFromEssential(const Mat3& E) {
   const Eigen::JacobiSVD<Mat3> svd(E, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Mat3 U = svd.matrixU();
@@ -374,7 +457,16 @@ TwoViewResult TwoViewInitializer::initialize(const std::vector<Vec2>& pts_ref, c
   // The same minimal sets for both models, so that neither is luckier.
   const auto sets = drawMinimalSets(n, std::max(1, params_.ransac_iterations), seed_);
   auto [H, score_h] = ransac(matches, sets, computeHomography, scoreHomography);
-  auto [F, score_f] = ransac(matches, sets, computeFundamental, scoreFundamental);
+  const Mat3 K = K_;
+  const bool calibrated = params_.score_calibrated_f;
+  const auto estimate_f = [&K, calibrated](const std::vector<Vec2>& ref, const std::vector<Vec2>& cur) {
+    // Score F as the calibrated motion it implies: on near-planar scenes the
+    // 8-point F is poorly constrained and its free directions fit noise, so
+    // that raw F wins inliers that no camera motion explains.
+    const Mat3 F = computeFundamental(ref, cur);
+    return calibrated ? nearestCalibratedFundamental(F, K) : F;
+  };
+  auto [F, score_f] = ransac(matches, sets, estimate_f, scoreFundamental);
   result.score_h = score_h.score;
   result.score_f = score_f.score;
   if (score_h.score + score_f.score <= 0) {
@@ -400,6 +492,14 @@ TwoViewResult TwoViewInitializer::initialize(const std::vector<Vec2>& pts_ref, c
   std::stable_sort(checks.begin(), checks.end(),
                    [](const MotionCheck& a, const MotionCheck& b) { return a.n_good > b.n_good; });
   MotionCheck& best = checks.front();
+  // Polish the winner on the points it explains and keep the result if it
+  // explains at least as many.
+  if (params_.refine_motion && best.n_good >= kMinimalSetSize) {
+    std::vector<bool> explained = best.good;
+    const SE3 refined = refineMotion(best.T_cur_ref, K_, matches, explained);
+    MotionCheck refined_check = checkMotion(refined, K_, matches, chosen.inliers, min_point_parallax_cos);
+    if (refined_check.n_good >= best.n_good) best = std::move(refined_check);
+  }
   const int second_good = checks.size() > 1 ? checks[1].n_good : 0;
 
   result.T_cur_ref = best.T_cur_ref;
@@ -424,6 +524,14 @@ TwoViewResult TwoViewInitializer::initialize(const std::vector<Vec2>& pts_ref, c
   if (result.median_parallax_deg < params_.min_parallax_deg) {
     result.failure_reason = "insufficient parallax (median " + formatDeg(result.median_parallax_deg) + " deg < " +
                             formatDeg(params_.min_parallax_deg) + " deg)";
+    return result;
+  }
+  // The motion must explain (nearly) all of its model's inliers; a wrong F or
+  // H decomposition leaves many of them behind a camera or off their rays.
+  const int n_consistent = static_cast<int>(best.consistent_parallax_deg.size());
+  if (n_consistent < params_.min_consistent_fraction * result.n_model_inliers) {
+    result.failure_reason = "motion from " + model_name + " explains only " + std::to_string(n_consistent) + " of " +
+                            std::to_string(result.n_model_inliers) + " inliers";
     return result;
   }
   if (second_good > params_.max_second_best_ratio * best.n_good) {

@@ -16,8 +16,7 @@ Mat34 projectionMatrix(const Mat3& K, const SE3& T_cw);
 // the null vector of the stacked 4x4 system (SVD). x1, x2 must be in the
 // coordinates P1, P2 map to (pixels for K[R|t], normalised for [R|t]).
 // Returns false when the solution is at infinity (|w| < 1e-12 |X|, parallel
-// rays) or not finite; X is then
-// left unspecified.
+// rays) or not finite; X is then left unspecified.
 bool triangulateDlt(const Mat34& P1, const Mat34& P2, const Vec2& x1, const Vec2& x2, Vec3& X);
 
 // Cosine of the angle at X between the rays towards the two camera centres.

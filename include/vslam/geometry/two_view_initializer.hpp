@@ -26,6 +26,8 @@ struct TwoViewResult {
   int n_triangulated = 0;
   double median_parallax_deg = 0;  // over the triangulated points of the chosen motion
   std::string failure_reason;      // why it failed (for the log); empty on success
+  // On failure the other fields still describe the best attempt, for logging;
+  // nothing in them may be used to build a map.
 };
 
 class TwoViewInitializer {
@@ -57,6 +59,10 @@ Mat3 computeHomography(const std::vector<Vec2>& p1, const std::vector<Vec2>& p2)
 // Fundamental matrix with p2^T F p1 = 0 by the normalised 8-point algorithm,
 // rank 2 enforced; needs >= 8 points.
 Mat3 computeFundamental(const std::vector<Vec2>& p1, const std::vector<Vec2>& p2);
+// The fundamental matrix of the essential matrix nearest to K^T F K (equal
+// singular values, Frobenius norm): F restricted to motions a camera with
+// intrinsics K can make.
+Mat3 nearestCalibratedFundamental(const Mat3& F, const Mat3& K);
 // The four (R, t) with E ~ [t]x R (|t| = 1), i.e. T_2_1 candidates for
 // x2^T E x1 = 0 in normalised coordinates.
 std::vector<SE3> motionsFromEssential(const Mat3& E);

@@ -350,6 +350,8 @@ std::vector<KeyFrame*> LoopClosing::detectCandidates(KeyFrame* current) {
     next_groups.push_back(std::move(group));
   }
   consistent_groups_ = std::move(next_groups);
+  spdlog::debug("loop detection, keyframe {}: {} covisible (excluded), min score {:.3f}, {} scored, {} grouped, {} consistent",
+                current->id(), neighbours.size(), min_score, scored.size(), accepted.size(), result.size());
   return result;
 }
 

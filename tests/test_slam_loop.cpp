@@ -1,7 +1,8 @@
 // Place recognition in the pipeline, on real fr1_xyz frames (deterministic
-// mode): relocalisation after a gap, a loop closed by playing the sequence
-// forward then backward, and the final full bundle adjustment.
+// mode): relocalisation after a gap, loop closing on a forward-then-backward
+// play, the final full bundle adjustment, the default vocabulary.
 #include <algorithm>
+#include <filesystem>
 
 #include <gtest/gtest.h>
 
@@ -10,6 +11,7 @@
 #include "vslam/io/sequence.hpp"
 #include "vslam/slam/loop_closing.hpp"
 #include "vslam/slam/system.hpp"
+#include "vslam/place/vocabulary.hpp"
 
 namespace vslam {
 namespace {
@@ -154,6 +156,26 @@ TEST(SlamLoop, MissingVocabularyIsAnInputError) {
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("nope.bin"), std::string::npos) << e.what();
   }
+}
+
+}  // namespace
+}  // namespace vslam
+
+namespace vslam {
+namespace {
+
+TEST(SlamLoop, DefaultVocabularyResolvesFromTheProjectRootAndLoads) {
+  const std::filesystem::path previous = std::filesystem::current_path();
+  std::filesystem::current_path(test::scratchDir("SlamLoop_DefaultVocabulary"));
+  const std::string resolved = resolveVocabularyPath(LoopParams{}.vocabulary);
+  std::filesystem::current_path(previous);
+  EXPECT_EQ(std::filesystem::path(resolved), test::sourceDir() / "vocab" / "orbvoc.bin");
+  const Vocabulary vocabulary = Vocabulary::load(resolved);
+  EXPECT_EQ(vocabulary.branching(), 10);
+  EXPECT_EQ(vocabulary.depth(), 5);
+  EXPECT_GT(vocabulary.wordCount(), 50000u);
+  // A path that exists nowhere is returned as given, for the loader to report.
+  EXPECT_EQ(resolveVocabularyPath("no/such/vocab.bin"), "no/such/vocab.bin");
 }
 
 }  // namespace

@@ -22,6 +22,9 @@ struct RunCommandOptions {
   SequenceOptions sequence;
   RunOptions pipeline;
   std::string detector;  // "" = the config's detector.model
+  std::string vocabulary;  // "" = the config's loop.vocabulary
+  bool no_loop = false;
+  bool no_final_ba = false;
   bool no_fetch = false;
   bool info_only = false;
   int max_frames = 0;
@@ -64,6 +67,9 @@ int run(RunCommandOptions options) {
   if (options.max_frames > 0 && static_cast<size_t>(options.max_frames) < total_frames)
     sequence.frames.resize(options.max_frames);
   if (!options.detector.empty()) sequence.config.detector.model = options.detector;
+  if (!options.vocabulary.empty()) sequence.config.loop.vocabulary = options.vocabulary;
+  if (options.no_loop) sequence.config.loop.enabled = false;
+  if (options.no_final_ba) sequence.config.loop.final_ba = false;
 
   if (options.pipeline.mode == "rgbd") {
     if (sequence.kind == SequenceKind::Kitti)
@@ -131,6 +137,11 @@ Command addRunCommand(CLI::App& app) {
   cli->add_option("--out", options->pipeline.out_dir, "Output folder (default: runs/<sequence>-<date>-<time>)");
   cli->add_option("--detector", options->detector,
                   "Object detector model, or 'none' (default: the config's detector.model)");
+  cli->add_option("--vocabulary", options->vocabulary,
+                  "Place-recognition vocabulary (ours or DBoW2's ORBvoc.txt) for relocalisation and loop closing "
+                  "(default: the config's loop.vocabulary, vocab/orbvoc.bin)");
+  cli->add_flag("--no-loop", options->no_loop, "Disable loop closing (relocalisation stays on)");
+  cli->add_flag("--no-final-ba", options->no_final_ba, "Skip the full bundle adjustment after the last frame");
   cli->add_flag("--deterministic", options->pipeline.deterministic,
                 "Run the threads in lock-step so that repeated runs give identical results (default: off)");
   cli->add_flag("--no-fetch", options->no_fetch,

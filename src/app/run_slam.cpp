@@ -21,6 +21,7 @@
 #include "vslam/io/ply.hpp"
 #include "vslam/io/trajectory_io.hpp"
 #include "vslam/render/run_renders.hpp"
+#include "vslam/slam/loop_closing.hpp"
 #include "vslam/slam/system.hpp"
 
 namespace vslam::app {
@@ -239,6 +240,20 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
     report["ate"] = nullptr;
     report["rpe"] = nullptr;
   }
+  const std::vector<StampedPose>& keyframes_before_ba = system.keyframeTrajectoryBeforeFinalBa();
+  if (sequence.hasGroundTruth() && !keyframes_before_ba.empty()) {
+    report["ate_before_final_ba"]["keyframes"] = ateJson(keyframes_before_ba, sequence, mono);
+    report["ate_before_final_ba"]["frames"] = ateJson(system.frameTrajectoryBeforeFinalBa(), sequence, mono);
+  }
+  report["final_ba"] = sequence.config.loop.final_ba;
+  report["relocalisations"] = stats.relocalisations;
+  nlohmann::json loops = nlohmann::json::array();
+  for (const LoopRecord& loop : system.loops())
+    loops.push_back({{"current_keyframe", loop.current_keyframe},
+                     {"matched_keyframe", loop.matched_keyframe},
+                     {"scale", loop.scale},
+                     {"inliers", loop.inliers}});
+  report["loops"] = loops;
   nlohmann::json stage_ms;
   for (const auto& [stage, s] : system.timer().summary())
     stage_ms[stage] = {{"median", s.median_ms}, {"p95", s.p95_ms}, {"mean", s.mean_ms}, {"count", s.count}};
@@ -260,11 +275,20 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
                 report["ate"]["keyframes"]["scale"].get<double>(), report["ate"]["frames"]["rmse_m"].get<double>(),
                 report["ate"]["frames"]["pairs"].get<int>());
   }
+  if (report.contains("ate_before_final_ba"))
+    std::printf("ATE RMSE before final BA: keyframes %.4f m, frames %.4f m\n",
+                report["ate_before_final_ba"]["keyframes"]["rmse_m"].get<double>(),
+                report["ate_before_final_ba"]["frames"]["rmse_m"].get<double>());
+  std::cout << "loops closed: " << loops.size() << ", relocalisations: " << stats.relocalisations << "\n";
   const auto summary = system.timer().summary();
   // "Tracking" per frame includes feature extraction, as ORB-SLAM reports it.
   if (summary.count("frame"))
     std::printf("tracking: median %.1f ms, p95 %.1f ms per frame; wall %.1f s (%.1f fps), peak %.0f MB\n",
                 summary.at("frame").median_ms, summary.at("frame").p95_ms, wall_s, stats.frames / wall_s, peakRssMb());
+  for (const char* stage : {"local_mapping", "loop_detection", "loop_correction", "full_ba", "final_ba"})
+    if (summary.count(stage))
+      std::printf("%s: median %.1f ms, p95 %.1f ms, %zu times\n", stage, summary.at(stage).median_ms,
+                  summary.at(stage).p95_ms, summary.at(stage).count);
   std::cout << "output: " << out_dir << "\n";
   std::fflush(stdout);
   return 0;

@@ -135,6 +135,7 @@ Config loadVslamYaml(const std::string& path) {
   reader.optional(loop, "loop", "consistency", config.loop.consistency);
   reader.optional(loop, "loop", "final_ba", config.loop.final_ba);
   reader.optional(loop, "loop", "final_ba_iterations", config.loop.final_ba_iterations);
+  reader.optional(loop, "loop", "vocabulary", config.loop.vocabulary);
 
   const YAML::Node det = reader.section("detector");
   DetectorParams& d = config.detector;
@@ -217,6 +218,13 @@ Config loadConfig(const std::string& path) {
   if (first_line.rfind("%YAML:", 0) == 0) return loadOrbSlamSettings(path);
   in.close();
   return loadVslamYaml(path);
+}
+
+std::string resolveVocabularyPath(const std::string& path) {
+  namespace fs = std::filesystem;
+  if (path.empty() || fs::exists(path) || fs::path(path).is_absolute()) return path;
+  const fs::path in_project = fs::path(VSLAM_SOURCE_DIR) / path;
+  return fs::exists(in_project) ? in_project.string() : path;
 }
 
 std::string projectConfigDir() { return std::string(VSLAM_SOURCE_DIR) + "/config"; }

@@ -1,5 +1,7 @@
 #include "vslam/map/map.hpp"
 
+#include <algorithm>
+
 namespace vslam {
 
 KeyFrame* Map::createKeyFrame(const Frame& frame) {
@@ -26,6 +28,13 @@ std::vector<MapPoint*> Map::mapPoints() const {
   for (const auto& point : map_points_)
     if (!point->isBad()) result.push_back(point.get());
   return result;
+}
+
+KeyFrame* Map::keyFrameById(long id) const {
+  // Ids grow with creation order, so the vector is sorted by id.
+  auto it = std::lower_bound(keyframes_.begin(), keyframes_.end(), id,
+                             [](const std::unique_ptr<KeyFrame>& keyframe, long value) { return keyframe->id() < value; });
+  return it != keyframes_.end() && (*it)->id() == id ? it->get() : nullptr;
 }
 
 void Map::clear() {

@@ -10,6 +10,9 @@
 #include "vslam/core/error.hpp"
 #include "vslam/geometry/triangulation.hpp"
 #include "vslam/optimize/bundle_adjuster.hpp"
+#include "vslam/place/keyframe_database.hpp"
+#include "vslam/place/vocabulary.hpp"
+#include "vslam/slam/loop_closing.hpp"
 #include "vslam/slam/map_matching.hpp"
 
 namespace vslam {
@@ -92,6 +95,21 @@ void LocalMapping::processQueued() {
   }
 }
 
+void LocalMapping::pause() {
+  std::unique_lock<std::mutex> lock(queue_mutex_);
+  paused_ = true;
+  abort_ba_.store(true);
+  queue_cv_.wait(lock, [this] { return !processing_; });
+}
+
+void LocalMapping::resume() {
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    paused_ = false;
+  }
+  queue_cv_.notify_all();
+}
+
 void LocalMapping::start() {
   finish_requested_ = false;
   thread_ = std::thread([this] { run(); });
@@ -113,7 +131,7 @@ void LocalMapping::run() {
     {
       std::unique_lock<std::mutex> lock(queue_mutex_);
       if (queue_.empty()) accepting_.store(true);
-      queue_cv_.wait(lock, [this] { return !queue_.empty() || finish_requested_; });
+      queue_cv_.wait(lock, [this] { return !paused_ && (!queue_.empty() || finish_requested_); });
       if (queue_.empty()) return;  // finish requested and nothing left
       keyframe = queue_.front();
       queue_.pop_front();
@@ -137,6 +155,12 @@ bool LocalMapping::queueEmpty() const {
 
 void LocalMapping::processKeyFrame(KeyFrame* keyframe) {
   ScopedStage stage(timer_, "local_mapping");
+  if (vocabulary_ && !keyframe->hasBow()) {
+    // Without the map lock: a keyframe's descriptors never change, and no other
+    // thread reads its bag of words before it enters the database below.
+    ScopedStage bow_stage(timer_, "bow");
+    vocabulary_->transform(keyframe->descriptors, keyframe->bow, keyframe->bow_features);
+  }
   {
     std::lock_guard<std::mutex> lock(map_.mutex());
     if (keyframe->isBad()) return;
@@ -150,6 +174,12 @@ void LocalMapping::processKeyFrame(KeyFrame* keyframe) {
     std::lock_guard<std::mutex> lock(map_.mutex());
     cullRedundantKeyFrames(keyframe);
   }
+  {
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    if (keyframe->isBad()) return;
+    if (database_ && keyframe->hasBow()) database_->add(keyframe->id(), keyframe->bow);
+  }
+  if (loop_closing_) loop_closing_->insertKeyFrame(keyframe);
 }
 
 void LocalMapping::linkKeyFrame(KeyFrame* keyframe) {
@@ -398,6 +428,8 @@ void LocalMapping::cullRedundantKeyFrames(KeyFrame* keyframe) {
     }
     if (with_points > 0 && redundant > config_.mapping.redundant_keyframe_ratio * with_points) {
       candidate->setBad();
+      if (!candidate->isBad()) continue;  // held by Loop Closing
+      if (database_) database_->erase(candidate->id());
       ++culled_keyframes_;
     }
   }

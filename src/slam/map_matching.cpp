@@ -181,6 +181,101 @@ int searchByDescriptor(const KeyFrame& keyframe, const Frame& frame, std::vector
   return count;
 }
 
+namespace {
+
+// Walks two direct indices node by node (both ordered by node id) and, for
+// every pair of features under the same node, lets `match` compare them.
+// `candidate_of(i)` says whether feature i of the first image takes part.
+template <typename Offer, typename Accept>
+void forEachSharedNode(const FeatureVector& first, const FeatureVector& second, Offer offer, Accept accept) {
+  auto a = first.begin();
+  auto b = second.begin();
+  while (a != first.end() && b != second.end()) {
+    if (a->first < b->first) {
+      a = first.lower_bound(b->first);
+    } else if (b->first < a->first) {
+      b = second.lower_bound(a->first);
+    } else {
+      for (int i : a->second) {
+        BestTwo best;
+        if (!offer(i, b->second, best)) continue;
+        accept(i, best);
+      }
+      ++a;
+      ++b;
+    }
+  }
+}
+
+}  // namespace
+
+int searchByBoW(const KeyFrame& keyframe, const Frame& frame, const FeatureVector& frame_features,
+                std::vector<MapPoint*>& matches, double ratio) {
+  matches.assign(frame.size(), nullptr);
+  std::vector<int> best_distance_at(frame.size(), std::numeric_limits<int>::max());
+  RotationHistogram rotation;
+  int count = 0;
+  forEachSharedNode(
+      keyframe.bow_features, frame_features,
+      [&](int i, const std::vector<int>& frame_indices, BestTwo& best) {
+        MapPoint* point = keyframe.mapPoint(i);
+        if (!point || point->isBad()) return false;
+        const uint8_t* descriptor = keyframe.descriptors.ptr<uint8_t>(i);
+        for (int j : frame_indices)
+          if (!matches[j]) best.offer(hammingDistance(descriptor, frame.descriptors.ptr<uint8_t>(j)), j, 0);
+        return true;
+      },
+      [&](int i, const BestTwo& best) {
+        if (best.best_index < 0 || best.best_distance > kDescriptorLowThreshold) return;
+        if (best.best_distance >= ratio * best.second_distance) return;
+        if (matches[best.best_index]) return;
+        matches[best.best_index] = keyframe.mapPoint(i);
+        best_distance_at[best.best_index] = best.best_distance;
+        rotation.add(keyframe.keypoints[i].angle, frame.keypoints[best.best_index].angle, best.best_index);
+        ++count;
+      });
+  for (int j : rotation.rejectedMatches())
+    if (matches[j]) {
+      matches[j] = nullptr;
+      --count;
+    }
+  return count;
+}
+
+int searchByBoW(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>& matches, double ratio) {
+  matches.assign(kf1.size(), nullptr);
+  std::vector<bool> taken2(kf2.size(), false);
+  RotationHistogram rotation;
+  int count = 0;
+  forEachSharedNode(
+      kf1.bow_features, kf2.bow_features,
+      [&](int i, const std::vector<int>& indices2, BestTwo& best) {
+        MapPoint* point1 = kf1.mapPoint(i);
+        if (!point1 || point1->isBad()) return false;
+        const uint8_t* descriptor = kf1.descriptors.ptr<uint8_t>(i);
+        for (int j : indices2) {
+          MapPoint* point2 = kf2.mapPoint(j);
+          if (taken2[j] || !point2 || point2->isBad()) continue;
+          best.offer(hammingDistance(descriptor, kf2.descriptors.ptr<uint8_t>(j)), j, 0);
+        }
+        return true;
+      },
+      [&](int i, const BestTwo& best) {
+        if (best.best_index < 0 || best.best_distance > kDescriptorLowThreshold) return;
+        if (best.best_distance >= ratio * best.second_distance) return;
+        matches[i] = kf2.mapPoint(best.best_index);
+        taken2[best.best_index] = true;
+        rotation.add(kf1.keypoints[i].angle, kf2.keypoints[best.best_index].angle, i);
+        ++count;
+      });
+  for (int i : rotation.rejectedMatches())
+    if (matches[i]) {
+      matches[i] = nullptr;
+      --count;
+    }
+  return count;
+}
+
 int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius_factor) {
   const PinholeCamera& camera = keyframe->camera();
   const ScalePyramid& pyramid = keyframe->pyramid();

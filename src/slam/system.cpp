@@ -1,8 +1,13 @@
 #include "vslam/slam/system.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include "vslam/map/map.hpp"
+#include "vslam/place/keyframe_database.hpp"
+#include "vslam/place/vocabulary.hpp"
 #include "vslam/slam/frame_builder.hpp"
 #include "vslam/slam/local_mapping.hpp"
+#include "vslam/slam/loop_closing.hpp"
 #include "vslam/slam/tracking.hpp"
 
 namespace vslam {
@@ -14,7 +19,22 @@ System::System(const Config& config, const SystemOptions& options)
       frame_builder_(std::make_unique<FrameBuilder>(config, config.camera)),
       local_mapping_(std::make_unique<LocalMapping>(config, *map_, &timer_)),
       tracking_(std::make_unique<Tracking>(config, *map_, *local_mapping_, &timer_, options.deterministic)) {
-  if (!options_.deterministic) local_mapping_->start();
+  // An empty vocabulary path switches place recognition off; a bad file is an input error.
+  if (!config_.loop.vocabulary.empty()) {
+    vocabulary_ = std::make_unique<Vocabulary>(Vocabulary::load(resolveVocabularyPath(config_.loop.vocabulary)));
+    database_ = std::make_unique<KeyframeDatabase>();
+    if (config_.loop.enabled)
+      loop_closing_ =
+          std::make_unique<LoopClosing>(config_, *map_, *vocabulary_, *database_, *local_mapping_, &timer_);
+    local_mapping_->setPlaceRecognition(vocabulary_.get(), database_.get(), loop_closing_.get());
+    tracking_->setPlaceRecognition(vocabulary_.get(), database_.get());
+  } else {
+    spdlog::warn("no vocabulary: relocalisation only retries the last keyframe and loop closing is off");
+  }
+  if (!options_.deterministic) {
+    local_mapping_->start();
+    if (loop_closing_) loop_closing_->start();
+  }
 }
 
 System::~System() { finish(); }
@@ -30,17 +50,38 @@ bool System::processFrame(int index, double timestamp, const cv::Mat& image, con
     const int n_features = initialising ? 2 * config_.orb.n_features : -1;
     frame = frame_builder_->build(next_frame_id_++, index, timestamp, image, depth_m, n_features);
   }
-  ScopedStage stage(&timer_, "track");
-  return tracking_->track(frame);
+  bool tracked;
+  {
+    ScopedStage stage(&timer_, "track");
+    tracked = tracking_->track(frame);
+  }
+  // Deterministic mode: loop closing runs synchronously after each frame's mapping.
+  if (options_.deterministic && loop_closing_) loop_closing_->processQueued();
+  return tracked;
 }
 
 void System::finish() {
   if (finished_) return;
   finished_ = true;
-  if (options_.deterministic)
+  if (options_.deterministic) {
     local_mapping_->processQueued();
-  else
+    if (loop_closing_) loop_closing_->processQueued();
+  } else {
     local_mapping_->finish();
+    if (loop_closing_) loop_closing_->finish();
+  }
+  if (config_.loop.final_ba && tracking_->state() != TrackingState::NotInitialized) {
+    frames_before_final_ba_ = frameTrajectory();
+    keyframes_before_final_ba_ = keyframeTrajectory();
+    ScopedStage stage(&timer_, "final_ba");
+    const FullBundleAdjustmentResult result = runFullBundleAdjustment(*map_, config_.loop.final_ba_iterations);
+    spdlog::info("final bundle adjustment: {} keyframes, {} points, cost {:.1f} -> {:.1f}", result.keyframes,
+                 result.points, result.initial_cost, result.final_cost);
+  }
+}
+
+std::vector<LoopRecord> System::loops() const {
+  return loop_closing_ ? loop_closing_->loops() : std::vector<LoopRecord>{};
 }
 
 std::vector<StampedPose> System::frameTrajectory() const {
@@ -106,6 +147,7 @@ SystemStats System::stats() const {
   stats.initialised_at_index = tracking_->initialisedAtIndex();
   stats.local_bundle_adjustments = local_mapping_->localBundleAdjustments();
   stats.culled_keyframes = local_mapping_->culledKeyFrames();
+  stats.relocalisations = tracking_->relocalisations();
   return stats;
 }
 

@@ -3,12 +3,16 @@
 #include <algorithm>
 #include <map>
 
+#include <opencv2/calib3d.hpp>
+
 #include <spdlog/spdlog.h>
 
 #include "vslam/feature/matcher.hpp"
 #include "vslam/geometry/two_view_initializer.hpp"
 #include "vslam/optimize/bundle_adjuster.hpp"
 #include "vslam/optimize/pose_optimizer.hpp"
+#include "vslam/place/keyframe_database.hpp"
+#include "vslam/place/vocabulary.hpp"
 #include "vslam/slam/local_mapping.hpp"
 #include "vslam/slam/map_matching.hpp"
 
@@ -20,6 +24,10 @@ constexpr int kInitMinMatches = 100;
 constexpr double kInitWindowPx = 100.0;
 constexpr double kProjectionRadiusPx = 15.0;  // monocular search window around the predicted position
 constexpr size_t kMaxLocalKeyFrames = 80;
+constexpr size_t kResetMaxKeyFrames = 3;       // lost with this many keyframes or fewer: start again
+constexpr size_t kRelocCandidates = 10;        // best-scoring keyframes tried
+constexpr int kRelocMinBowMatches = 15;
+constexpr int kRelocMinInliers = 50;
 
 }  // namespace
 
@@ -47,15 +55,27 @@ bool Tracking::track(Frame& frame) {
   }
 
   std::unique_lock<std::mutex> lock(map_.mutex());
+  // After a loop correction or full BA the last frame's pose is stale: take it
+  // again from its reference keyframe, whose pose was corrected.
+  if (map_.bigChangeIndex() != seen_big_change_) {
+    seen_big_change_ = map_.bigChangeIndex();
+    if (last_frame_ && last_frame_->has_pose && !records_.empty() && records_.back().tracked &&
+        records_.back().reference && !records_.back().reference->isBad())
+      last_frame_->T_cw = records_.back().T_c_ref * records_.back().reference->pose();
+  }
   bool ok = false;
   if (state_ == TrackingState::Ok) {
     if (velocity_ && last_frame_) ok = trackWithMotionModel(frame);
     if (!ok) ok = trackReferenceKeyFrame(frame);
   } else {
-    // Lost: try the reference keyframe and the most recent keyframes (relocalisation
-    // proper comes with the place-recognition module).
-    ok = trackReferenceKeyFrame(frame);
-    if (ok) last_relocalisation_frame_id_ = frame.id;
+    // Lost: relocalise against the whole map by place recognition; without a
+    // vocabulary, retry the reference keyframe.
+    ok = database_ && vocabulary_ ? relocalise(frame) : trackReferenceKeyFrame(frame);
+    if (ok) {
+      last_relocalisation_frame_id_ = frame.id;
+      ++relocalisations_;
+      spdlog::info("frame {} (t={:.3f}): relocalised", frame.index, frame.timestamp);
+    }
   }
   if (ok) ok = trackLocalMap(frame);
 
@@ -87,8 +107,9 @@ bool Tracking::track(Frame& frame) {
 
   if (deterministic_) local_mapping_.processQueued();
 
-  // Early failure: a map of a handful of keyframes is not worth keeping.
-  if (!ok && map_.keyframeCount() <= 5) {
+  // Early failure: a map just initialised (a few keyframes) is not worth
+  // keeping. A larger map is kept while relocalisation can still succeed.
+  if (!ok && map_.keyframeCount() <= kResetMaxKeyFrames) {
     spdlog::warn("tracking lost soon after initialisation: resetting the map");
     resetMap();
   }
@@ -300,6 +321,71 @@ bool Tracking::trackReferenceKeyFrame(Frame& frame) {
   frame.T_cw = last_frame_ && last_frame_->has_pose ? last_frame_->T_cw : reference->pose();
   optimisePose(frame);
   return discardOutliers(frame) >= 10;
+}
+
+bool Tracking::relocalise(Frame& frame) {
+  ScopedStage stage(timer_, "relocalisation");
+  BowVector bow;
+  FeatureVector features;
+  vocabulary_->transform(frame.descriptors, bow, features);
+  const auto candidates = database_->query(bow, 0.0, {}, kRelocCandidates);
+  const cv::Mat K = frame.camera->K();
+  for (const auto& [keyframe_id, score] : candidates) {
+    KeyFrame* keyframe = map_.keyFrameById(keyframe_id);
+    if (!keyframe || keyframe->isBad() || !keyframe->hasBow()) continue;
+    std::vector<MapPoint*> matches;
+    if (searchByBoW(*keyframe, frame, features, matches) < kRelocMinBowMatches) continue;
+
+    // PnP with RANSAC on the BoW matches (OpenCV's RANSAC uses a fixed seed: deterministic).
+    std::vector<cv::Point3f> object;
+    std::vector<cv::Point2f> image;
+    std::vector<int> keypoint_of;
+    for (size_t i = 0; i < matches.size(); ++i) {
+      if (!matches[i]) continue;
+      const Vec3& p = matches[i]->position();
+      object.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+      image.push_back(frame.points[i]);
+      keypoint_of.push_back(static_cast<int>(i));
+    }
+    cv::Mat rvec, tvec;
+    std::vector<int> inliers;
+    if (!cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, 300, 4.0f, 0.99, inliers,
+                            cv::SOLVEPNP_EPNP) ||
+        static_cast<int>(inliers.size()) < 10)
+      continue;
+    cv::Mat R_cv;
+    cv::Rodrigues(rvec, R_cv);
+    SE3 T_cw;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) T_cw.R(r, c) = R_cv.at<double>(r, c);
+      T_cw.t(r) = tvec.at<double>(r);
+    }
+    frame.T_cw = T_cw;
+    frame.map_points.assign(frame.size(), nullptr);
+    for (int k : inliers) frame.map_points[keypoint_of[k]] = matches[keypoint_of[k]];
+    optimisePose(frame);
+    int good = discardOutliers(frame);
+    if (good < 10) continue;
+    // Too few: project the candidate's other points with the new pose, then optimise again.
+    if (good < kRelocMinInliers) {
+      const int added = searchByProjection(frame, *keyframe, frame.map_points, 10.0, 100);
+      if (good + added >= kRelocMinInliers) {
+        optimisePose(frame);
+        good = discardOutliers(frame);
+        if (good < kRelocMinInliers) {
+          searchByProjection(frame, *keyframe, frame.map_points, 3.0, 64);
+          optimisePose(frame);
+          good = discardOutliers(frame);
+        }
+      }
+    }
+    if (good >= kRelocMinInliers) {
+      reference_keyframe_ = keyframe;
+      return true;
+    }
+  }
+  frame.map_points.assign(frame.size(), nullptr);
+  return false;
 }
 
 void Tracking::updateLocalMap(Frame& frame) {

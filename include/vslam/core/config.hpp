@@ -52,7 +52,16 @@ struct LoopParams {
   int consistency = 3;
   bool final_ba = true;
   int final_ba_iterations = 20;
+  // Place-recognition vocabulary for relocalisation and loop detection. A
+  // relative path not found from the working directory is taken from the
+  // project root (resolveVocabularyPath).
+  std::string vocabulary = "vocab/orbvoc.bin";
 };
+
+// The vocabulary file `LoopParams::vocabulary` names: as given if it exists,
+// else relative to the project root; as given when neither exists (the
+// loader then reports it missing).
+std::string resolveVocabularyPath(const std::string& path);
 
 struct DetectorParams {
   std::string model = "yolo-fastest-1.1-xl";  // "none" disables detection

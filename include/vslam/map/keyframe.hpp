@@ -9,6 +9,7 @@
 
 #include "vslam/map/frame.hpp"
 #include "vslam/map/id_order.hpp"
+#include "vslam/place/vocabulary.hpp"
 
 namespace vslam {
 
@@ -39,6 +40,11 @@ class KeyFrame {
   FeatureGrid grid;
   FeatureView view() const { return {keypoints, points, descriptors}; }
   Vec2 point(size_t i) const { return Vec2(points[i].x, points[i].y); }
+  // Bag of words and direct index, set once by Local Mapping when it takes the
+  // keyframe (empty without a vocabulary); read-only afterwards.
+  BowVector bow;
+  FeatureVector bow_features;
+  bool hasBow() const { return !bow_features.empty(); }
 
   // Map point associations, one slot per keypoint.
   MapPoint* mapPoint(size_t i) const { return map_points_[i]; }
@@ -80,6 +86,9 @@ class KeyFrame {
   long fuse_target_for_kf = -1;
   long ba_local_for_kf = -1;
   long ba_fixed_for_kf = -1;
+  // Scratch for relocalisation and loop detection (place queries).
+  long reloc_query_for_frame = -1;
+  long loop_query_for_kf = -1;
 
  private:
   void updateOrder();

@@ -11,6 +11,17 @@
 // results back under the lock). Objects are never freed during a run — a
 // culled keyframe or point is only flagged bad — so a pointer taken under the
 // lock stays valid after it is released, though its contents may then change.
+//
+// Loop closing adds three rules. (1) Loop Closing pauses Local Mapping
+// (LocalMapping::pause/resume) and holds the lock for the whole correction
+// (propagation, fusion, essential-graph optimisation, write-back), so no
+// keyframe is linked half-way through it; Tracking waits for that one step.
+// (2) The full BA after a loop (and the final BA) solves without the lock and
+// merges under it; whatever changed meanwhile follows the spanning tree. (3) A
+// keyframe's bag of words is written once, by Local Mapping without the lock,
+// before the keyframe enters the KeyframeDatabase; nobody reads it earlier.
+// After a correction Map::informBigChange() tells Tracking to re-derive its
+// last frame's pose from its reference keyframe.
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -35,6 +46,8 @@ class Map {
   KeyFrame* firstKeyFrame() const { return keyframes_.empty() ? nullptr : keyframes_.front().get(); }
   // Every keyframe ever created, bad ones included (trajectory output follows culled keyframes' children).
   const std::vector<std::unique_ptr<KeyFrame>>& allKeyFrames() const { return keyframes_; }
+  // The keyframe with this id (bad ones included), or nullptr.
+  KeyFrame* keyFrameById(long id) const;
   long maxKeyFrameId() const { return next_keyframe_id_ - 1; }
 
   // Destroys everything (a failed initialisation). Only when no thread holds pointers into the map.

@@ -17,6 +17,10 @@
 
 namespace vslam {
 
+class Vocabulary;
+class KeyframeDatabase;
+class LoopClosing;
+
 class LocalMapping {
  public:
   LocalMapping(const Config& config, Map& map, StageTimer* timer);
@@ -32,6 +36,19 @@ class LocalMapping {
 
   // Drops queued keyframes and waits until nothing is being processed (map reset).
   void reset();
+
+  // Place recognition: each processed keyframe gets its bag of words, enters
+  // the database (culled ones leave it) and goes on to Loop Closing. Any may be null.
+  void setPlaceRecognition(const Vocabulary* vocabulary, KeyframeDatabase* database, LoopClosing* loop_closing) {
+    vocabulary_ = vocabulary;
+    database_ = database;
+    loop_closing_ = loop_closing;
+  }
+
+  // Loop Closing stops the thread while it corrects a loop: pause() returns
+  // once the keyframe in hand is done; queued keyframes wait until resume().
+  void pause();
+  void resume();
 
   // Deterministic mode: processes every queued keyframe on the caller's thread.
   void processQueued();
@@ -65,7 +82,11 @@ class LocalMapping {
   bool processing_ = false;  // guarded by queue_mutex_
   std::atomic<bool> abort_ba_{false};
   bool finish_requested_ = false;
+  bool paused_ = false;  // guarded by queue_mutex_
   std::thread thread_;
+  const Vocabulary* vocabulary_ = nullptr;
+  KeyframeDatabase* database_ = nullptr;
+  LoopClosing* loop_closing_ = nullptr;
 
   std::list<MapPoint*> recent_points_;  // touched only by the mapping step
   int local_ba_count_ = 0;

@@ -37,6 +37,16 @@ int searchByProjection(Frame& frame, const KeyFrame& keyframe, const std::vector
 int searchByDescriptor(const KeyFrame& keyframe, const Frame& frame, std::vector<MapPoint*>& matches,
                        double ratio = 0.7);
 
+// Matches the keyframe's map points to the frame's features that fall under
+// the same vocabulary node (the direct indices `keyframe.bow_features` and
+// `frame_features`), with a ratio test and rotation consistency: ORB-SLAM's
+// SearchByBoW, used by relocalisation. Fills `matches` per frame keypoint.
+int searchByBoW(const KeyFrame& keyframe, const Frame& frame, const FeatureVector& frame_features,
+                std::vector<MapPoint*>& matches, double ratio = 0.75);
+// The same between two keyframes (loop detection): matches[i] is the map
+// point of kf2 matched to keypoint i of kf1, for keypoints of kf1 with a map point.
+int searchByBoW(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>& matches, double ratio = 0.75);
+
 // Pairs of keypoints (index in kf1, index in kf2), both without a map point,
 // whose descriptors agree and which satisfy the epipolar constraint of the two
 // keyframes' poses; candidates for triangulating new map points.

@@ -18,6 +18,10 @@ class Map;
 class LocalMapping;
 class Tracking;
 class FrameBuilder;
+class Vocabulary;
+class KeyframeDatabase;
+class LoopClosing;
+struct LoopRecord;
 
 struct SystemOptions {
   bool deterministic = false;  // Local Mapping runs synchronously after each keyframe
@@ -46,6 +50,7 @@ struct SystemStats {
   int initialised_at_index = -1;
   int local_bundle_adjustments = 0;
   int culled_keyframes = 0;
+  int relocalisations = 0;
 };
 
 class System {
@@ -57,7 +62,8 @@ class System {
 
   // Tracks one image (BGR or grey); `depth_m` CV_32F metres or empty. Returns true when tracked.
   bool processFrame(int index, double timestamp, const cv::Mat& image, const cv::Mat& depth_m = cv::Mat());
-  // Lets Local Mapping finish its queue and stops the threads.
+  // Lets Local Mapping and Loop Closing finish their queues, stops the
+  // threads, then runs the final full bundle adjustment (config.loop.final_ba).
   void finish();
 
   std::vector<StampedPose> frameTrajectory() const;     // every tracked frame, T_wc
@@ -66,6 +72,10 @@ class System {
   std::vector<ExportedMapPoint> mapPoints() const;
   std::vector<ExportedKeyFrame> keyFrames() const;
   SystemStats stats() const;
+  std::vector<LoopRecord> loops() const;  // verified and corrected loops, in order
+  // Trajectories as they were before the final full BA; empty when it did not run.
+  const std::vector<StampedPose>& frameTrajectoryBeforeFinalBa() const { return frames_before_final_ba_; }
+  const std::vector<StampedPose>& keyframeTrajectoryBeforeFinalBa() const { return keyframes_before_final_ba_; }
   int lastTrackedPoints() const;
   StageTimer& timer() { return timer_; }
 
@@ -74,9 +84,13 @@ class System {
   SystemOptions options_;
   StageTimer timer_;
   std::unique_ptr<Map> map_;
+  std::unique_ptr<Vocabulary> vocabulary_;  // null: no relocalisation by BoW, no loop closing
+  std::unique_ptr<KeyframeDatabase> database_;
   std::unique_ptr<FrameBuilder> frame_builder_;
   std::unique_ptr<LocalMapping> local_mapping_;
   std::unique_ptr<Tracking> tracking_;
+  std::unique_ptr<LoopClosing> loop_closing_;
+  std::vector<StampedPose> frames_before_final_ba_, keyframes_before_final_ba_;
   long next_frame_id_ = 0;
   bool finished_ = false;
 };

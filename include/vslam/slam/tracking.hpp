@@ -15,6 +15,8 @@
 namespace vslam {
 
 class LocalMapping;
+class Vocabulary;
+class KeyframeDatabase;
 
 enum class TrackingState { NotInitialized, Ok, Lost };
 
@@ -33,6 +35,13 @@ class Tracking {
  public:
   Tracking(const Config& config, Map& map, LocalMapping& local_mapping, StageTimer* timer, bool deterministic);
 
+  // Relocalisation needs both; without them a lost frame only retries the reference keyframe.
+  void setPlaceRecognition(const Vocabulary* vocabulary, const KeyframeDatabase* database) {
+    vocabulary_ = vocabulary;
+    database_ = database;
+  }
+  int relocalisations() const { return relocalisations_; }
+
   // Tracks one frame; returns true when its pose is known.
   bool track(Frame& frame);
 
@@ -47,6 +56,7 @@ class Tracking {
   bool trackWithMotionModel(Frame& frame);
   bool trackReferenceKeyFrame(Frame& frame);
   bool trackLocalMap(Frame& frame);
+  bool relocalise(Frame& frame);
   int optimisePose(Frame& frame);  // returns inliers, removes outlier matches' effects
   void updateLocalMap(Frame& frame);
   bool needNewKeyFrame(const Frame& frame) const;
@@ -75,6 +85,10 @@ class Tracking {
   int initialised_at_index_ = -1;
   int keyframes_created_ = 0;
   std::vector<FrameRecord> records_;
+  const Vocabulary* vocabulary_ = nullptr;
+  const KeyframeDatabase* database_ = nullptr;
+  int relocalisations_ = 0;
+  int seen_big_change_ = 0;
 };
 
 }  // namespace vslam

@@ -1,0 +1,105 @@
+#pragma once
+// The Loop Closing thread: takes each keyframe Local Mapping has finished,
+// looks for a place seen before (bag-of-words candidates consistent over
+// consecutive keyframes), verifies it with a Sim(3) between the two keyframes,
+// and corrects the drift: the loop's map points are fused, the essential graph
+// is optimised as a Sim(3) pose graph, then the whole map by bundle
+// adjustment. See docs/LOOP_CLOSING.md.
+//
+// Threads: in threaded mode it runs on its own thread; in deterministic mode
+// System calls processQueued() after every frame. Local Mapping is paused
+// while a loop is corrected (map.hpp's locking note).
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <set>
+#include <thread>
+#include <vector>
+
+#include "vslam/core/config.hpp"
+#include "vslam/core/stage_timer.hpp"
+#include "vslam/map/map.hpp"
+#include "vslam/place/keyframe_database.hpp"
+#include "vslam/place/vocabulary.hpp"
+
+namespace vslam {
+
+class LocalMapping;
+
+struct LoopRecord {
+  long current_keyframe = -1;
+  long matched_keyframe = -1;
+  double scale = 1.0;  // of the Sim(3) from the matched keyframe's camera to the current one's
+  int inliers = 0;     // map point matches supporting it after the projection search
+};
+
+struct FullBundleAdjustmentResult {
+  int keyframes = 0;
+  int points = 0;
+  double initial_cost = 0;
+  double final_cost = 0;
+};
+
+// Bundle adjustment of every live keyframe and map point, the first keyframe
+// fixed: the problem is copied under the map lock, solved without it, and
+// merged back under it. Keyframes created meanwhile follow their spanning-tree
+// parent's correction; points not in the problem follow their reference
+// keyframe. Used after a loop correction and as the final BA of a run.
+FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations);
+
+class LoopClosing {
+ public:
+  LoopClosing(const Config& config, Map& map, const Vocabulary& vocabulary, KeyframeDatabase& database,
+              LocalMapping& local_mapping, StageTimer* timer);
+  ~LoopClosing();
+
+  // Called by Local Mapping when a keyframe is processed and in the database.
+  void insertKeyFrame(KeyFrame* keyframe);
+
+  void processQueued();  // deterministic mode: on the caller's thread
+  void start();          // threaded mode
+  void finish();         // processes what is queued, then stops the thread
+
+  std::vector<LoopRecord> loops() const;
+
+ private:
+  struct ConsistentGroup {
+    std::set<long> keyframe_ids;
+    int consistency = 0;
+  };
+  struct LoopCandidate {
+    KeyFrame* matched = nullptr;
+    Sim3 S_cw;                            // corrected similarity of the current keyframe
+    std::vector<MapPoint*> matched_points;  // per keypoint of the current keyframe
+    std::vector<MapPoint*> loop_points;     // the matched keyframe's and its neighbours' points
+    double scale = 1.0;
+    int inliers = 0;
+  };
+
+  void run();
+  void process(long keyframe_id);
+  // Caller holds the map lock for these two.
+  std::vector<KeyFrame*> detectCandidates(KeyFrame* current);
+  bool computeSim3(KeyFrame* current, const std::vector<KeyFrame*>& candidates, LoopCandidate& loop);
+  void correctLoop(KeyFrame* current, LoopCandidate& loop);
+
+  Config config_;
+  Map& map_;
+  const Vocabulary& vocabulary_;
+  KeyframeDatabase& database_;
+  LocalMapping& local_mapping_;
+  StageTimer* timer_;
+
+  std::vector<ConsistentGroup> consistent_groups_;
+  long last_loop_keyframe_id_ = -1;
+
+  mutable std::mutex mutex_;  // guards queue_, finish_requested_, loops_
+  std::condition_variable cv_;
+  std::deque<long> queue_;  // keyframe ids: a map reset may free queued keyframes
+  bool finish_requested_ = false;
+  std::vector<LoopRecord> loops_;
+  std::thread thread_;
+};
+
+}  // namespace vslam

@@ -1,0 +1,579 @@
+#include "vslam/slam/loop_closing.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <random>
+#include <unordered_map>
+#include <unordered_set>
+
+#include <Eigen/Geometry>
+#include <spdlog/spdlog.h>
+
+#include "vslam/feature/matcher.hpp"
+#include "vslam/optimize/bundle_adjuster.hpp"
+#include "vslam/optimize/pose_graph.hpp"
+#include "vslam/slam/local_mapping.hpp"
+#include "vslam/slam/map_matching.hpp"
+
+namespace vslam {
+namespace {
+
+constexpr long kMinKeyFramesSinceLoop = 10;   // no detection right after a map start or a loop
+constexpr int kMinBowMatches = 20;            // to try a Sim(3)
+constexpr int kRansacIterations = 300;
+constexpr int kMinRansacInliers = 20;
+constexpr int kMinLoopInliers = 40;           // after the projection search (ORB-SLAM's value)
+constexpr int kEssentialCovisibilityWeight = 100;
+constexpr int kPoseGraphIterations = 20;
+constexpr int kLoopFullBaIterations = 10;
+constexpr double kChi2Sim3 = 9.210;           // per image, 2 dof, 99 %
+
+Sim3 toSim3(const SE3& T) { return Sim3(T); }
+
+// Similarity s R x + t that best maps `from` onto `to` (Umeyama, with scale).
+Sim3 similarityFromPoints(const std::vector<Vec3>& from, const std::vector<Vec3>& to) {
+  Eigen::Matrix<double, 3, Eigen::Dynamic> a(3, from.size()), b(3, to.size());
+  for (size_t i = 0; i < from.size(); ++i) {
+    a.col(i) = from[i];
+    b.col(i) = to[i];
+  }
+  const Eigen::Matrix4d m = Eigen::umeyama(a, b, true);
+  const Mat3 sR = m.topLeftCorner<3, 3>();
+  const double s = std::cbrt(sR.determinant());
+  return Sim3(s, sR / s, m.topRightCorner<3, 1>());
+}
+
+// Projects `points` (not yet matched) with the similarity S_cw into the
+// current keyframe and matches them by descriptor: more support for a loop.
+int searchLoopByProjection(const KeyFrame& current, const Sim3& S_cw, const std::vector<MapPoint*>& points,
+                           std::vector<MapPoint*>& matched, double radius_px) {
+  const PinholeCamera& camera = current.camera();
+  const ScalePyramid& pyramid = current.pyramid();
+  std::unordered_set<const MapPoint*> already(matched.begin(), matched.end());
+  // The camera centre in world coordinates under S_cw, for distance and viewing-angle checks.
+  const Vec3 centre = -(S_cw.R.transpose() * S_cw.t) / S_cw.s;
+  int added = 0;
+  for (MapPoint* point : points) {
+    if (!point || point->isBad() || already.count(point)) continue;
+    const Vec3 p_c = S_cw * point->position();
+    if (p_c.z() <= 0) continue;
+    const Vec2 px = camera.project(p_c);
+    if (!camera.inImage(px)) continue;
+    const Vec3 ray = point->position() - centre;
+    const double distance = ray.norm();
+    if (distance < point->minDistance() || distance > point->maxDistance()) continue;
+    if (ray.dot(point->normal()) < 0.5 * distance) continue;
+    const int level = point->predictLevel(distance, pyramid);
+    const double radius = radius_px * pyramid.scale[level];
+    int best_distance = std::numeric_limits<int>::max();
+    int best_index = -1;
+    for (int j : current.grid.featuresInArea(px.x(), px.y(), radius)) {
+      if (matched[j]) continue;
+      const int kp_level = current.keypoints[j].octave;
+      if (kp_level < level - 1 || kp_level > level) continue;
+      const int d = hammingDistance(point->descriptor().ptr<uint8_t>(), current.descriptors.ptr<uint8_t>(j));
+      if (d < best_distance) {
+        best_distance = d;
+        best_index = j;
+      }
+    }
+    if (best_index >= 0 && best_distance <= kDescriptorLowThreshold) {
+      matched[best_index] = point;
+      ++added;
+    }
+  }
+  return added;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// Full bundle adjustment.
+
+FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations) {
+  FullBundleAdjustmentResult summary;
+  BundleProblem problem;
+  std::vector<KeyFrame*> keyframes;
+  std::vector<MapPoint*> points;
+  const PinholeCamera* camera = nullptr;
+  {
+    std::lock_guard<std::mutex> lock(map.mutex());
+    keyframes = map.keyframes();
+    if (keyframes.size() < 2) return summary;
+    camera = &keyframes.front()->camera();
+    KeyFrameMap<int> slot;
+    for (KeyFrame* kf : keyframes) {
+      slot[kf] = static_cast<int>(problem.keyframes.size());
+      // The first keyframe anchors the gauge (and, with the map's scale, the scale).
+      problem.keyframes.push_back({kf->id(), kf->pose(), kf == keyframes.front()});
+    }
+    for (MapPoint* point : map.mapPoints()) {
+      const size_t first_observation = problem.observations.size();
+      for (const auto& [kf, index] : point->observations()) {
+        auto it = slot.find(kf);
+        if (it == slot.end()) continue;
+        problem.observations.push_back({it->second, static_cast<int>(points.size()), kf->point(index),
+                                        kf->pyramid().inv_sigma2[kf->keypoints[index].octave]});
+      }
+      // Points seen only once would be unconstrained along their ray.
+      if (problem.observations.size() - first_observation < 2) {
+        problem.observations.resize(first_observation);
+        continue;
+      }
+      problem.points.push_back({point->id(), point->position(), false});
+      points.push_back(point);
+    }
+  }
+  BundleOptions options;
+  options.iterations_first = iterations;
+  options.iterations_second = 0;
+  options.remove_outliers = false;
+  const BundleResult result = bundleAdjust(*camera, 0.0, problem, options);
+  summary.keyframes = static_cast<int>(keyframes.size());
+  summary.points = static_cast<int>(points.size());
+  summary.initial_cost = result.initial_cost;
+  summary.final_cost = result.final_cost;
+
+  std::lock_guard<std::mutex> lock(map.mutex());
+  // Corrections T_new^-1 * T_old per optimised keyframe, to carry over to what was not optimised.
+  KeyFrameMap<SE3> before, after;
+  for (size_t k = 0; k < keyframes.size(); ++k) {
+    KeyFrame* kf = keyframes[k];
+    if (kf->isBad()) continue;
+    before[kf] = kf->pose();
+    after[kf] = problem.keyframes[k].T_cw;
+    kf->setPose(problem.keyframes[k].T_cw);
+  }
+  // Keyframes created during the BA: follow the parent's correction down the spanning tree.
+  std::vector<KeyFrame*> stack;
+  if (KeyFrame* root = map.firstKeyFrame()) stack.push_back(root);
+  while (!stack.empty()) {
+    KeyFrame* parent = stack.back();
+    stack.pop_back();
+    for (KeyFrame* child : parent->children()) {
+      if (child->isBad()) continue;
+      if (!after.count(child) && after.count(parent)) {
+        const SE3 T_child_parent = child->pose() * before[parent].inverse();
+        before[child] = child->pose();
+        after[child] = T_child_parent * after[parent];
+        child->setPose(after[child]);
+      }
+      stack.push_back(child);
+    }
+  }
+  std::unordered_set<const MapPoint*> optimised(points.begin(), points.end());
+  for (size_t p = 0; p < points.size(); ++p)
+    if (!points[p]->isBad()) points[p]->setPosition(problem.points[p].position_w);
+  for (MapPoint* point : map.mapPoints()) {
+    if (optimised.count(point)) continue;
+    KeyFrame* reference = point->reference();
+    if (!reference || !after.count(reference)) continue;
+    point->setPosition(after[reference].inverse() * (before[reference] * point->position()));
+  }
+  for (MapPoint* point : map.mapPoints()) {
+    KeyFrame* reference = point->reference();
+    if (reference && !reference->isBad()) point->updateNormalAndDepth(reference->pyramid());
+  }
+  map.informBigChange();
+  return summary;
+}
+
+// ---------------------------------------------------------------------------
+// Thread plumbing.
+
+LoopClosing::LoopClosing(const Config& config, Map& map, const Vocabulary& vocabulary, KeyframeDatabase& database,
+                         LocalMapping& local_mapping, StageTimer* timer)
+    : config_(config),
+      map_(map),
+      vocabulary_(vocabulary),
+      database_(database),
+      local_mapping_(local_mapping),
+      timer_(timer) {}
+
+LoopClosing::~LoopClosing() { finish(); }
+
+void LoopClosing::insertKeyFrame(KeyFrame* keyframe) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    queue_.push_back(keyframe->id());
+  }
+  cv_.notify_all();
+}
+
+void LoopClosing::processQueued() {
+  while (true) {
+    long id;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (queue_.empty()) return;
+      id = queue_.front();
+      queue_.pop_front();
+    }
+    process(id);
+  }
+}
+
+void LoopClosing::start() { thread_ = std::thread([this] { run(); }); }
+
+void LoopClosing::finish() {
+  if (!thread_.joinable()) return;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    finish_requested_ = true;
+  }
+  cv_.notify_all();
+  thread_.join();
+}
+
+void LoopClosing::run() {
+  while (true) {
+    long id;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait(lock, [this] { return !queue_.empty() || finish_requested_; });
+      if (queue_.empty()) return;
+      id = queue_.front();
+      queue_.pop_front();
+    }
+    process(id);
+  }
+}
+
+std::vector<LoopRecord> LoopClosing::loops() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return loops_;
+}
+
+void LoopClosing::process(long keyframe_id) {
+  KeyFrame* current = nullptr;
+  LoopCandidate loop;
+  bool found = false;
+  {
+    ScopedStage stage(timer_, "loop_detection");
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    current = map_.keyFrameById(keyframe_id);
+    if (!current || current->isBad() || !current->hasBow()) return;
+    const std::vector<KeyFrame*> candidates = detectCandidates(current);
+    if (!candidates.empty()) found = computeSim3(current, candidates, loop);
+  }
+  if (!found) return;
+  {
+    ScopedStage stage(timer_, "loop_correction");
+    local_mapping_.pause();
+    {
+      std::lock_guard<std::mutex> lock(map_.mutex());
+      correctLoop(current, loop);
+    }
+    local_mapping_.resume();
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    loops_.push_back({current->id(), loop.matched->id(), loop.scale, loop.inliers});
+  }
+  spdlog::info("loop closed: keyframe {} with keyframe {} ({} matches, scale {:.3f})", current->id(),
+               loop.matched->id(), loop.inliers, loop.scale);
+  // Full BA on this thread: Tracking and Local Mapping go on meanwhile (the
+  // problem is solved without the map lock) and the result is merged.
+  ScopedStage stage(timer_, "full_ba");
+  runFullBundleAdjustment(map_, kLoopFullBaIterations);
+}
+
+// ---------------------------------------------------------------------------
+// Detection.
+
+std::vector<KeyFrame*> LoopClosing::detectCandidates(KeyFrame* current) {
+  std::vector<KeyFrame*> result;
+  if (current->id() < last_loop_keyframe_id_ + kMinKeyFramesSinceLoop || map_.keyframeCount() <= kMinKeyFramesSinceLoop) {
+    consistent_groups_.clear();
+    return result;
+  }
+  // The weakest score among covisible neighbours: a loop candidate must look at least as similar.
+  const std::vector<KeyFrame*>& neighbours = current->orderedCovisibles();
+  double min_score = 1.0;
+  for (KeyFrame* neighbour : neighbours)
+    if (!neighbour->isBad() && neighbour->hasBow())
+      min_score = std::min(min_score, vocabulary_.score(current->bow, neighbour->bow));
+  std::unordered_set<long> exclude = {current->id()};
+  for (KeyFrame* neighbour : neighbours) exclude.insert(neighbour->id());
+
+  // Candidates: enough shared words (80 % of the best) and a score above the minimum.
+  const auto shared = database_.sharedWordCounts(current->bow, exclude);
+  int max_shared = 0;
+  for (const auto& [id, count] : shared) max_shared = std::max(max_shared, count);
+  std::vector<std::pair<KeyFrame*, double>> scored;
+  for (const auto& [id, score] : database_.query(current->bow, min_score, exclude, 0)) {
+    auto it = shared.find(id);
+    if (it == shared.end() || it->second < 0.8 * max_shared) continue;
+    KeyFrame* kf = map_.keyFrameById(id);
+    if (kf && !kf->isBad() && kf->hasBow()) scored.emplace_back(kf, score);
+  }
+  // Group each candidate with its best covisibles; keep groups scoring >= 75 % of the best.
+  KeyFrameMap<double> score_of;
+  for (const auto& [kf, score] : scored) score_of[kf] = score;
+  std::vector<std::pair<KeyFrame*, double>> groups;  // best keyframe of the group, accumulated score
+  double best_group = 0;
+  for (const auto& [kf, score] : scored) {
+    double accumulated = score;
+    KeyFrame* best = kf;
+    double best_score = score;
+    for (KeyFrame* neighbour : kf->bestCovisibles(10)) {
+      auto it = score_of.find(neighbour);
+      if (it == score_of.end()) continue;
+      accumulated += it->second;
+      if (it->second > best_score) {
+        best_score = it->second;
+        best = neighbour;
+      }
+    }
+    groups.emplace_back(best, accumulated);
+    best_group = std::max(best_group, accumulated);
+  }
+  std::vector<KeyFrame*> accepted;
+  KeyFrameSet seen;
+  for (const auto& [kf, accumulated] : groups)
+    if (accumulated >= 0.75 * best_group && seen.insert(kf).second) accepted.push_back(kf);
+
+  // Consistency: a candidate's group must overlap a group of the previous keyframe's candidates.
+  std::vector<ConsistentGroup> next_groups;
+  for (KeyFrame* candidate : accepted) {
+    ConsistentGroup group;
+    group.keyframe_ids.insert(candidate->id());
+    for (KeyFrame* neighbour : candidate->orderedCovisibles()) group.keyframe_ids.insert(neighbour->id());
+    int consistency = 1;
+    for (const ConsistentGroup& previous : consistent_groups_) {
+      const bool overlaps = std::any_of(group.keyframe_ids.begin(), group.keyframe_ids.end(),
+                                        [&](long id) { return previous.keyframe_ids.count(id) > 0; });
+      if (overlaps) consistency = std::max(consistency, previous.consistency + 1);
+    }
+    group.consistency = consistency;
+    if (consistency >= config_.loop.consistency) result.push_back(candidate);
+    next_groups.push_back(std::move(group));
+  }
+  consistent_groups_ = std::move(next_groups);
+  spdlog::debug("loop detection, keyframe {}: {} covisible (excluded), min score {:.3f}, {} scored, {} grouped, {} consistent",
+                current->id(), neighbours.size(), min_score, scored.size(), accepted.size(), result.size());
+  return result;
+}
+
+// ---------------------------------------------------------------------------
+// Sim(3) verification.
+
+bool LoopClosing::computeSim3(KeyFrame* current, const std::vector<KeyFrame*>& candidates, LoopCandidate& loop) {
+  const PinholeCamera& camera = current->camera();
+  const ScalePyramid& pyramid = current->pyramid();
+  std::mt19937 rng(static_cast<uint32_t>(current->id()));  // deterministic per keyframe
+  for (KeyFrame* candidate : candidates) {
+    std::vector<MapPoint*> bow_matches;
+    if (searchByBoW(*current, *candidate, bow_matches) < kMinBowMatches) continue;
+    // Matched pairs in each camera's coordinates.
+    std::vector<Sim3Match> pairs;
+    std::vector<int> keypoint_of;
+    for (size_t i = 0; i < bow_matches.size(); ++i) {
+      MapPoint* own = current->mapPoint(i);
+      MapPoint* other = bow_matches[i];
+      if (!own || own->isBad() || !other || other->isBad()) continue;
+      const int j = other->keypointIn(candidate);
+      if (j < 0) continue;
+      Sim3Match m;
+      m.point1_c1 = current->pose() * own->position();
+      m.point2_c2 = candidate->pose() * other->position();
+      m.pixel1 = current->point(i);
+      m.pixel2 = candidate->point(j);
+      m.inv_sigma2_1 = pyramid.inv_sigma2[current->keypoints[i].octave];
+      m.inv_sigma2_2 = pyramid.inv_sigma2[candidate->keypoints[j].octave];
+      pairs.push_back(m);
+      keypoint_of.push_back(static_cast<int>(i));
+    }
+    if (static_cast<int>(pairs.size()) < kMinBowMatches) continue;
+
+    // RANSAC over minimal sets of three pairs: S12 maps candidate-camera points into the current camera.
+    auto inliersOf = [&](const Sim3& S12, std::vector<bool>* mask) {
+      const Sim3 S21 = S12.inverse();
+      int count = 0;
+      for (size_t k = 0; k < pairs.size(); ++k) {
+        const Vec3 p1 = S12 * pairs[k].point2_c2;
+        const Vec3 p2 = S21 * pairs[k].point1_c1;
+        bool ok = p1.z() > 0 && p2.z() > 0 &&
+                  (camera.project(p1) - pairs[k].pixel1).squaredNorm() * pairs[k].inv_sigma2_1 < kChi2Sim3 &&
+                  (camera.project(p2) - pairs[k].pixel2).squaredNorm() * pairs[k].inv_sigma2_2 < kChi2Sim3;
+        if (mask) (*mask)[k] = ok;
+        count += ok ? 1 : 0;
+      }
+      return count;
+    };
+    Sim3 best;
+    int best_inliers = 0;
+    const uint32_t n = static_cast<uint32_t>(pairs.size());
+    for (int it = 0; it < kRansacIterations; ++it) {
+      uint32_t a = rng() % n, b = rng() % n, c = rng() % n;
+      if (a == b || b == c || a == c) continue;
+      const Sim3 S12 = similarityFromPoints({pairs[a].point2_c2, pairs[b].point2_c2, pairs[c].point2_c2},
+                                            {pairs[a].point1_c1, pairs[b].point1_c1, pairs[c].point1_c1});
+      if (!(S12.s > 0) || !std::isfinite(S12.s)) continue;
+      const int inliers = inliersOf(S12, nullptr);
+      if (inliers > best_inliers) {
+        best_inliers = inliers;
+        best = S12;
+      }
+    }
+    if (best_inliers < kMinRansacInliers) continue;
+
+    // Refine on the inliers, with more matches found by projection.
+    std::vector<bool> mask(pairs.size(), false);
+    inliersOf(best, &mask);
+    std::vector<Sim3Match> inlier_pairs;
+    for (size_t k = 0; k < pairs.size(); ++k)
+      if (mask[k]) inlier_pairs.push_back(pairs[k]);
+    Sim3 S12 = best;
+    const Sim3OptimizationResult refined = optimizeSim3(camera, inlier_pairs, S12);
+    if (refined.n_inliers < kMinRansacInliers) continue;
+
+    std::vector<MapPoint*> loop_points;
+    {
+      KeyFrameSet loop_keyframes = {candidate};
+      for (KeyFrame* neighbour : candidate->orderedCovisibles()) loop_keyframes.insert(neighbour);
+      std::unordered_set<const MapPoint*> seen;
+      for (KeyFrame* kf : loop_keyframes) {
+        if (kf->isBad()) continue;
+        for (MapPoint* point : kf->mapPoints())
+          if (point && !point->isBad() && seen.insert(point).second) loop_points.push_back(point);
+      }
+    }
+    const Sim3 S_cw = S12 * toSim3(candidate->pose());
+    std::vector<MapPoint*> matched(current->size(), nullptr);
+    size_t q = 0;
+    for (size_t k = 0; k < pairs.size(); ++k)
+      if (mask[k]) {
+        if (refined.inlier[q]) matched[keypoint_of[k]] = bow_matches[keypoint_of[k]];
+        ++q;
+      }
+    searchLoopByProjection(*current, S_cw, loop_points, matched, 10.0);
+    const int total = static_cast<int>(std::count_if(matched.begin(), matched.end(), [](MapPoint* p) { return p; }));
+    spdlog::debug("loop candidate {} for keyframe {}: {} BoW, {} RANSAC, {} refined, {} total", candidate->id(),
+                  current->id(), pairs.size(), best_inliers, refined.n_inliers, total);
+    if (total < kMinLoopInliers) continue;
+    loop.matched = candidate;
+    loop.S_cw = S_cw;
+    loop.matched_points = std::move(matched);
+    loop.loop_points = std::move(loop_points);
+    loop.scale = S12.s;
+    loop.inliers = total;
+    return true;
+  }
+  return false;
+}
+
+// ---------------------------------------------------------------------------
+// Correction.
+
+void LoopClosing::correctLoop(KeyFrame* current, LoopCandidate& loop) {
+  current->updateConnections();
+  // The current keyframe and its neighbours move with the loop's similarity.
+  std::vector<KeyFrame*> connected = {current};
+  for (KeyFrame* neighbour : current->orderedCovisibles())
+    if (!neighbour->isBad()) connected.push_back(neighbour);
+  std::sort(connected.begin(), connected.end(), [](KeyFrame* a, KeyFrame* b) { return a->id() < b->id(); });
+
+  KeyFrameMap<Sim3> corrected, uncorrected;
+  const SE3 T_wc = current->pose().inverse();
+  for (KeyFrame* kf : connected) {
+    uncorrected[kf] = toSim3(kf->pose());
+    corrected[kf] = kf == current ? loop.S_cw : toSim3(kf->pose() * T_wc) * loop.S_cw;
+  }
+  // Their map points follow, each once.
+  std::unordered_map<const MapPoint*, KeyFrame*> corrected_by;
+  for (KeyFrame* kf : connected) {
+    const Sim3 correction = corrected[kf].inverse() * uncorrected[kf];
+    for (MapPoint* point : kf->mapPoints()) {
+      if (!point || point->isBad() || corrected_by.count(point)) continue;
+      point->setPosition(correction * point->position());
+      corrected_by[point] = kf;
+      point->updateNormalAndDepth(kf->pyramid());
+    }
+  }
+  for (KeyFrame* kf : connected) kf->setPose(rigidPoseFromSim3(corrected[kf]));
+
+  // Fuse the loop's points: the matched ones replace the current keyframe's, then
+  // every loop point is projected into the corrected neighbours.
+  for (size_t i = 0; i < loop.matched_points.size(); ++i) {
+    MapPoint* loop_point = loop.matched_points[i];
+    if (!loop_point || loop_point->isBad()) continue;
+    MapPoint* own = current->mapPoint(i);
+    if (own == loop_point) continue;
+    if (own && !own->isBad()) {
+      own->replaceWith(loop_point);
+    } else if (loop_point->keypointIn(current) < 0) {
+      current->setMapPoint(i, loop_point);
+      loop_point->addObservation(current, static_cast<int>(i));
+      loop_point->updateDescriptor();
+    }
+  }
+  for (KeyFrame* kf : connected) fuse(kf, loop.loop_points, 4.0);
+
+  // New links created by the fusion are the loop edges of the essential graph.
+  KeyFrameMap<KeyFrameSet> new_links;
+  KeyFrameSet connected_set(connected.begin(), connected.end());
+  for (KeyFrame* kf : connected) {
+    KeyFrameSet before(kf->orderedCovisibles().begin(), kf->orderedCovisibles().end());
+    kf->updateConnections();
+    for (KeyFrame* other : kf->orderedCovisibles())
+      if (!before.count(other) && !connected_set.count(other)) new_links[kf].insert(other);
+  }
+
+  // Essential graph: every live keyframe; the matched keyframe is held fixed.
+  const std::vector<KeyFrame*> keyframes = map_.keyframes();
+  KeyFrameMap<int> slot;
+  std::vector<PoseGraphVertex> vertices;
+  for (KeyFrame* kf : keyframes) {
+    slot[kf] = static_cast<int>(vertices.size());
+    const Sim3 initial = corrected.count(kf) ? corrected[kf] : toSim3(kf->pose());
+    vertices.push_back({kf->id(), initial, kf == loop.matched});
+    if (!uncorrected.count(kf)) uncorrected[kf] = initial;
+  }
+  std::vector<PoseGraphEdge> edges;
+  std::set<std::pair<long, long>> added;
+  auto addEdge = [&](KeyFrame* from, KeyFrame* to, const Sim3& S_to_from, double weight) {
+    if (!slot.count(from) || !slot.count(to) || from == to) return;
+    const auto key = std::minmax(from->id(), to->id());
+    if (!added.insert(key).second) return;
+    edges.push_back({slot[from], slot[to], S_to_from, weight});
+  };
+  // The relative measurement before correction (what the map measured), except for
+  // the new loop links, which come from the corrected poses.
+  auto measured = [&](KeyFrame* from, KeyFrame* to) { return uncorrected[to] * uncorrected[from].inverse(); };
+  for (const auto& [kf, others] : new_links)
+    for (KeyFrame* other : others) addEdge(kf, other, vertices[slot[other]].S_cw * vertices[slot[kf]].S_cw.inverse(), 1.0);
+  addEdge(current, loop.matched, vertices[slot[loop.matched]].S_cw * vertices[slot[current]].S_cw.inverse(), 1.0);
+  for (KeyFrame* kf : keyframes) {
+    if (KeyFrame* parent = kf->parent()) addEdge(kf, parent, measured(kf, parent), 1.0);
+    for (KeyFrame* other : kf->loopEdges()) addEdge(kf, other, measured(kf, other), 1.0);
+    for (KeyFrame* other : kf->covisiblesWithWeight(kEssentialCovisibilityWeight)) addEdge(kf, other, measured(kf, other), 1.0);
+  }
+  PoseGraphOptions options;
+  options.iterations = kPoseGraphIterations;
+  optimizeSim3PoseGraph(vertices, edges, options);
+
+  // Write back: poses, then points through the keyframe that last moved them.
+  KeyFrameMap<Sim3> initial;
+  for (KeyFrame* kf : keyframes) initial[kf] = corrected.count(kf) ? corrected[kf] : toSim3(kf->pose());
+  for (MapPoint* point : map_.mapPoints()) {
+    auto it = corrected_by.find(point);
+    KeyFrame* by = it != corrected_by.end() ? it->second : point->reference();
+    if (!by || !slot.count(by)) continue;
+    point->setPosition(vertices[slot[by]].S_cw.inverse() * (initial[by] * point->position()));
+  }
+  for (KeyFrame* kf : keyframes) kf->setPose(rigidPoseFromSim3(vertices[slot[kf]].S_cw));
+  for (MapPoint* point : map_.mapPoints())
+    if (point->reference() && !point->reference()->isBad()) point->updateNormalAndDepth(point->reference()->pyramid());
+
+  current->addLoopEdge(loop.matched);
+  loop.matched->addLoopEdge(current);
+  // Loop keyframes anchor the essential graph: never culled.
+  current->not_erase = true;
+  loop.matched->not_erase = true;
+  last_loop_keyframe_id_ = current->id();
+  consistent_groups_.clear();
+  map_.informBigChange();
+}
+
+}  // namespace vslam

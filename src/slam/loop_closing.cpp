@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <limits>
-#include <random>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -10,6 +9,7 @@
 #include <spdlog/spdlog.h>
 
 #include "vslam/feature/matcher.hpp"
+#include "vslam/geometry/sim3_solver.hpp"
 #include "vslam/optimize/bundle_adjuster.hpp"
 #include "vslam/optimize/pose_graph.hpp"
 #include "vslam/slam/local_mapping.hpp"
@@ -26,22 +26,8 @@ constexpr int kMinLoopInliers = 40;           // after the projection search (OR
 constexpr int kEssentialCovisibilityWeight = 100;
 constexpr int kPoseGraphIterations = 20;
 constexpr int kLoopFullBaIterations = 10;
-constexpr double kChi2Sim3 = 9.210;           // per image, 2 dof, 99 %
 
 Sim3 toSim3(const SE3& T) { return Sim3(T); }
-
-// Similarity s R x + t that best maps `from` onto `to` (Umeyama, with scale).
-Sim3 similarityFromPoints(const std::vector<Vec3>& from, const std::vector<Vec3>& to) {
-  Eigen::Matrix<double, 3, Eigen::Dynamic> a(3, from.size()), b(3, to.size());
-  for (size_t i = 0; i < from.size(); ++i) {
-    a.col(i) = from[i];
-    b.col(i) = to[i];
-  }
-  const Eigen::Matrix4d m = Eigen::umeyama(a, b, true);
-  const Mat3 sR = m.topLeftCorner<3, 3>();
-  const double s = std::cbrt(sR.determinant());
-  return Sim3(s, sR / s, m.topRightCorner<3, 1>());
-}
 
 // Projects `points` (not yet matched) with the similarity S_cw into the
 // current keyframe and matches them by descriptor: more support for a loop.
@@ -361,7 +347,6 @@ std::vector<KeyFrame*> LoopClosing::detectCandidates(KeyFrame* current) {
 bool LoopClosing::computeSim3(KeyFrame* current, const std::vector<KeyFrame*>& candidates, LoopCandidate& loop) {
   const PinholeCamera& camera = current->camera();
   const ScalePyramid& pyramid = current->pyramid();
-  std::mt19937 rng(static_cast<uint32_t>(current->id()));  // deterministic per keyframe
   for (KeyFrame* candidate : candidates) {
     std::vector<MapPoint*> bow_matches;
     if (searchByBoW(*current, *candidate, bow_matches) < kMinBowMatches) continue;
@@ -386,41 +371,30 @@ bool LoopClosing::computeSim3(KeyFrame* current, const std::vector<KeyFrame*>& c
     }
     if (static_cast<int>(pairs.size()) < kMinBowMatches) continue;
 
-    // RANSAC over minimal sets of three pairs: S12 maps candidate-camera points into the current camera.
-    auto inliersOf = [&](const Sim3& S12, std::vector<bool>* mask) {
-      const Sim3 S21 = S12.inverse();
-      int count = 0;
-      for (size_t k = 0; k < pairs.size(); ++k) {
-        const Vec3 p1 = S12 * pairs[k].point2_c2;
-        const Vec3 p2 = S21 * pairs[k].point1_c1;
-        bool ok = p1.z() > 0 && p2.z() > 0 &&
-                  (camera.project(p1) - pairs[k].pixel1).squaredNorm() * pairs[k].inv_sigma2_1 < kChi2Sim3 &&
-                  (camera.project(p2) - pairs[k].pixel2).squaredNorm() * pairs[k].inv_sigma2_2 < kChi2Sim3;
-        if (mask) (*mask)[k] = ok;
-        count += ok ? 1 : 0;
-      }
-      return count;
-    };
-    Sim3 best;
-    int best_inliers = 0;
-    const uint32_t n = static_cast<uint32_t>(pairs.size());
-    for (int it = 0; it < kRansacIterations; ++it) {
-      uint32_t a = rng() % n, b = rng() % n, c = rng() % n;
-      if (a == b || b == c || a == c) continue;
-      const Sim3 S12 = similarityFromPoints({pairs[a].point2_c2, pairs[b].point2_c2, pairs[c].point2_c2},
-                                            {pairs[a].point1_c1, pairs[b].point1_c1, pairs[c].point1_c1});
-      if (!(S12.s > 0) || !std::isfinite(S12.s)) continue;
-      const int inliers = inliersOf(S12, nullptr);
-      if (inliers > best_inliers) {
-        best_inliers = inliers;
-        best = S12;
-      }
+    // RANSAC over minimal sets of three pairs (seeded by the keyframe: deterministic);
+    // S12 maps candidate-camera points into the current camera. optimizeSim3 refines it below.
+    Sim3Correspondences correspondences;
+    for (const Sim3Match& m : pairs) {
+      correspondences.points_1.push_back(m.point1_c1);
+      correspondences.points_2.push_back(m.point2_c2);
+      correspondences.pixels_1.push_back(m.pixel1);
+      correspondences.pixels_2.push_back(m.pixel2);
+      correspondences.sigma2_1.push_back(1.0 / m.inv_sigma2_1);
+      correspondences.sigma2_2.push_back(1.0 / m.inv_sigma2_2);
     }
-    if (best_inliers < kMinRansacInliers) continue;
+    Sim3SolverParams ransac_params;
+    ransac_params.iterations = kRansacIterations;
+    ransac_params.min_inliers = kMinRansacInliers;
+    ransac_params.refine_reprojection = false;
+    const Mat3 K = camera.Keigen();
+    const Sim3Result ransac =
+        solveSim3Ransac(correspondences, K, K, ransac_params, static_cast<uint32_t>(current->id()));
+    if (!ransac.success) continue;
+    const Sim3 best = ransac.S12;
+    const int best_inliers = ransac.n_inliers;
 
     // Refine on the inliers, with more matches found by projection.
-    std::vector<bool> mask(pairs.size(), false);
-    inliersOf(best, &mask);
+    const std::vector<bool>& mask = ransac.inliers;
     std::vector<Sim3Match> inlier_pairs;
     for (size_t k = 0; k < pairs.size(); ++k)
       if (mask[k]) inlier_pairs.push_back(pairs[k]);

@@ -8,6 +8,7 @@
 #include <spdlog/spdlog.h>
 
 #include "vslam/feature/matcher.hpp"
+#include "vslam/geometry/pnp.hpp"
 #include "vslam/geometry/two_view_initializer.hpp"
 #include "vslam/optimize/bundle_adjuster.hpp"
 #include "vslam/optimize/pose_optimizer.hpp"
@@ -329,37 +330,27 @@ bool Tracking::relocalise(Frame& frame) {
   FeatureVector features;
   vocabulary_->transform(frame.descriptors, bow, features);
   const auto candidates = database_->query(bow, 0.0, {}, kRelocCandidates);
-  const cv::Mat K = frame.camera->K();
   for (const auto& [keyframe_id, score] : candidates) {
     KeyFrame* keyframe = map_.keyFrameById(keyframe_id);
     if (!keyframe || keyframe->isBad() || !keyframe->hasBow()) continue;
     std::vector<MapPoint*> matches;
     if (searchByBoW(*keyframe, frame, features, matches) < kRelocMinBowMatches) continue;
 
-    // PnP with RANSAC on the BoW matches (OpenCV's RANSAC uses a fixed seed: deterministic).
-    std::vector<cv::Point3f> object;
-    std::vector<cv::Point2f> image;
+    // PnP with RANSAC on the BoW matches (seeded by the keyframe: deterministic).
+    std::vector<Vec3> points_w;
+    std::vector<Vec2> pixels;
     std::vector<int> keypoint_of;
     for (size_t i = 0; i < matches.size(); ++i) {
       if (!matches[i]) continue;
-      const Vec3& p = matches[i]->position();
-      object.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
-      image.push_back(frame.points[i]);
+      points_w.push_back(matches[i]->position());
+      pixels.push_back(frame.point(i));
       keypoint_of.push_back(static_cast<int>(i));
     }
-    cv::Mat rvec, tvec;
-    std::vector<int> inliers;
-    if (!cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, 300, 4.0f, 0.99, inliers,
-                            cv::SOLVEPNP_EPNP) ||
-        static_cast<int>(inliers.size()) < 10)
-      continue;
-    cv::Mat R_cv;
-    cv::Rodrigues(rvec, R_cv);
-    SE3 T_cw;
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) T_cw.R(r, c) = R_cv.at<double>(r, c);
-      T_cw.t(r) = tvec.at<double>(r);
-    }
+    const PnpResult pnp = solvePnpRansac(points_w, pixels, frame.camera->Keigen(), 300, 2.4477, 10,
+                                         static_cast<uint32_t>(keyframe_id));
+    if (!pnp.success) continue;
+    const SE3 T_cw = pnp.T_cw;
+    const std::vector<int>& inliers = pnp.inliers;
     frame.T_cw = T_cw;
     frame.map_points.assign(frame.size(), nullptr);
     for (int k : inliers) frame.map_points[keypoint_of[k]] = matches[keypoint_of[k]];

@@ -10,6 +10,7 @@
 #include <spdlog/spdlog.h>
 
 #include "commands.hpp"
+#include "detector_options.hpp"
 #include "run_slam.hpp"
 #include "vslam/core/error.hpp"
 #include "vslam/io/sequence.hpp"
@@ -21,7 +22,7 @@ struct RunCommandOptions {
   std::string seq;
   SequenceOptions sequence;
   RunOptions pipeline;
-  std::string detector;  // "" = the config's detector.model
+  DetectorOptions detector;  // overrides the config's detector section
   bool no_fetch = false;
   bool info_only = false;
   int max_frames = 0;
@@ -63,7 +64,7 @@ int run(RunCommandOptions options) {
   const size_t total_frames = sequence.frames.size();
   if (options.max_frames > 0 && static_cast<size_t>(options.max_frames) < total_frames)
     sequence.frames.resize(options.max_frames);
-  if (!options.detector.empty()) sequence.config.detector.model = options.detector;
+  applyDetectorOptions(options.detector, sequence.config.detector);
 
   if (options.pipeline.mode == "rgbd") {
     if (sequence.kind == SequenceKind::Kitti)
@@ -129,8 +130,7 @@ Command addRunCommand(CLI::App& app) {
       ->check(CLI::IsMember({"mono", "rgbd"}))
       ->capture_default_str();
   cli->add_option("--out", options->pipeline.out_dir, "Output folder (default: runs/<sequence>-<date>-<time>)");
-  cli->add_option("--detector", options->detector,
-                  "Object detector model, or 'none' (default: the config's detector.model)");
+  addDetectorOptions(*cli, options->detector);
   cli->add_flag("--deterministic", options->pipeline.deterministic,
                 "Run the threads in lock-step so that repeated runs give identical results (default: off)");
   cli->add_flag("--no-fetch", options->no_fetch,

@@ -14,7 +14,7 @@ void addDetectorOptions(CLI::App& command, DetectorOptions& options) {
   command.add_option("--nms", options.nms, "Non-maximum suppression IoU threshold in [0, 1]");
   command.add_option("--min-box-px", options.min_box_px, "Skip boxes narrower or lower than this (paper: 64)");
   command.add_option("--box-features", options.box_features,
-                     "ORB features asked for inside each box (default 0: the frame's n_features, as in the paper)");
+                     "ORB features asked for inside each box (default 250; 0: the frame's n_features)");
   command.add_option("--dnn-target", options.dnn_target, "cpu (default), opencl or cuda, where OpenCV supports it");
   command.add_option("--dynamic-classes", options.dynamic_classes,
                      "Comma-separated classes whose keypoints are removed, e.g. person,car")

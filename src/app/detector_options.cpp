@@ -4,8 +4,8 @@ namespace vslam::app {
 
 void addDetectorOptions(CLI::App& command, DetectorOptions& options) {
   command.add_option("--detector", options.model,
-                     "Detector model: yolo-fastest-1.1-xl (default), yolo-fastest-1.1, yolov4, yolov4-tiny; "
-                     "'none' turns detection off");
+                     "Detector model: yolo-fastest-1.1-xl, yolo-fastest-1.1, yolov4, yolov4-tiny; 'none' turns detection "
+                     "off (default: the config's detector.model, yolo-fastest-1.1-xl)");
   command.add_option("--detector-cfg", options.cfg, "Darknet cfg file (overrides the model's)");
   command.add_option("--detector-weights", options.weights, "Darknet weights file (overrides the model's)");
   command.add_option("--detector-names", options.names, "Class names file, one a line (overrides the model's)");

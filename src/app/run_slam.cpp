@@ -175,6 +175,7 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   spdlog::info("running {} ({} frames, {}, {}) into {}", sequence.name, end - begin, options.mode,
                options.deterministic ? "deterministic" : "threaded", out_dir);
   const auto start = std::chrono::steady_clock::now();
+  std::vector<double> tracked_points;  // map points tracked in each tracked frame
   {
     FramePrefetcher prefetcher(sequence, begin, end, !mono);
     LoadedFrame loaded, ahead;
@@ -187,7 +188,8 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
       if (have_ahead && ahead.error.empty())
         system.submitAhead(sequence.frames[ahead.position].index, ahead.image);
       const FrameEntry& entry = sequence.frames[loaded.position];
-      system.processFrame(entry.index, entry.timestamp, loaded.image, loaded.depth);
+      if (system.processFrame(entry.index, entry.timestamp, loaded.image, loaded.depth))
+        tracked_points.push_back(system.lastTrackedPoints());
       loaded = std::move(ahead);
       have_loaded = have_ahead;
       ++processed;
@@ -243,6 +245,7 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   report["stage_ms"] = stage_ms;
   report["detector"] = detectorJson(system.detectionSummary());
   report["objects"] = static_cast<int>(objects.size());
+  report["tracked_points_per_frame"] = percentile(tracked_points, 0.5);  // median over tracked frames
   report["wall_s"] = wall_s;
   report["fps"] = wall_s > 0 ? stats.frames / wall_s : 0.0;
   report["peak_rss_mb"] = peakRssMb();

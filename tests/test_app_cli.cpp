@@ -97,6 +97,53 @@ TEST(CliRun, HelpListsEveryOptionAndItsDefault) {
     EXPECT_TRUE(contains(help.out, option)) << option << "\n" << help.out;
 }
 
+TEST(CliRun, DetectorWritesObjectsAndReport) {
+  const fs::path out = test::scratchDir("cli_run_detector");
+  const Outcome run =
+      vslam("run --seq tum/fr1_xyz --max-frames 40 --deterministic --box-features 200 --out " + quoted(out.string()));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(contains(run.out, "detector: yolo-fastest-1.1-xl")) << run.out;
+  const nlohmann::json report = nlohmann::json::parse(slurp(out / "report.json"));
+  EXPECT_EQ(report["detector"]["model"], "yolo-fastest-1.1-xl");
+  EXPECT_EQ(report["detector"]["input_size"], 320);
+  EXPECT_GT(report["detector"]["median_ms"].get<double>(), 0.0);
+  EXPECT_GT(report["detector"]["keypoints_added_per_frame"].get<double>(), 0.0);
+  for (const char* stage : {"detect", "detect_wait", "filter"}) EXPECT_EQ(report["stage_ms"][stage]["count"], 40) << stage;
+  const nlohmann::json objects = nlohmann::json::parse(slurp(out / "objects.json"));
+  ASSERT_TRUE(objects.is_array());
+  EXPECT_EQ(report["objects"], objects.size());
+  ASSERT_GE(objects.size(), 1u);
+  for (const nlohmann::json& object : objects) {
+    EXPECT_TRUE(object["class"].is_string());
+    for (const char* key : {"centroid", "box_min", "box_max"}) EXPECT_EQ(object[key].size(), 3u) << key;
+    EXPECT_GE(object["points"].get<int>(), 5);
+    EXPECT_GE(object["keyframes"].size(), 1u);
+    EXPECT_GT(object["confidence"].get<double>(), 0.0);
+  }
+}
+
+TEST(CliRun, DetectorNoneAndBadDetectorFiles) {
+  const fs::path out = test::scratchDir("cli_run_detector_none");
+  const Outcome none = vslam("run --seq tum/fr1_xyz --max-frames 30 --detector none --out " + quoted(out.string()));
+  ASSERT_EQ(none.exit_code, 0) << none.err;
+  const nlohmann::json report = nlohmann::json::parse(slurp(out / "report.json"));
+  EXPECT_EQ(report["detector"]["model"], "none");
+  EXPECT_EQ(report["objects"], 0);
+  EXPECT_FALSE(report["stage_ms"].contains("detect_wait"));
+
+  const Outcome bad = vslam("run --seq tum/fr1_xyz --max-frames 10 --detector-cfg /nonexistent/x.cfg --out " +
+                            quoted((out / "bad").string()));
+  EXPECT_EQ(bad.exit_code, 2);
+  const auto lines = errorLines(bad.err);
+  ASSERT_EQ(lines.size(), 1u) << bad.err;
+  EXPECT_TRUE(contains(lines[0], "/nonexistent/x.cfg")) << lines[0];
+
+  const Outcome typo = vslam("run --seq tum/fr1_xyz --max-frames 10 --dynamic-classes persn --out " +
+                             quoted((out / "typo").string()));
+  EXPECT_EQ(typo.exit_code, 2);
+  EXPECT_TRUE(contains(typo.err, "persn")) << typo.err;
+}
+
 TEST(CliRun, NotFoundWithoutFetchingExitsTwoWithOneLine) {
   const fs::path empty = test::scratchDir("cli_not_found");
   const Outcome run = vslam("run --seq tum/fr2_desk --no-fetch --data-root " + quoted(empty.string()));

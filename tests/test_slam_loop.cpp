@@ -41,6 +41,7 @@ TEST(SlamLoop, RelocalisesAfterSkippingFrames) {
   SystemOptions options;
   options.deterministic = true;
   Config config = sequence.config;
+  config.detector.model = "none";  // place recognition does not depend on the detector
   config.loop.final_ba = false;
   System system(config, options);
   for (size_t i : order) {
@@ -82,6 +83,7 @@ ForwardBackward runForwardBackward(const Sequence& sequence, size_t n, bool loop
   SystemOptions options;
   options.deterministic = true;
   Config config = sequence.config;
+  config.detector.model = "none";
   config.loop.enabled = loop_closing;
   config.loop.final_ba = false;  // compare loop closing alone
   System system(config, options);
@@ -134,7 +136,9 @@ TEST(SlamLoop, FinalBundleAdjustmentDoesNotWorsenTheTrajectory) {
   const Sequence sequence = fr1Xyz();
   SystemOptions options;
   options.deterministic = true;
-  System system(sequence.config, options);
+  Config config = sequence.config;
+  config.detector.model = "none";
+  System system(config, options);
   for (size_t i = 0; i < 150; ++i)
     system.processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, sequence.loadColor(i));
   system.finish();
@@ -147,6 +151,7 @@ TEST(SlamLoop, FinalBundleAdjustmentDoesNotWorsenTheTrajectory) {
 
 TEST(SlamLoop, MissingVocabularyIsAnInputError) {
   Config config;
+  config.detector.model = "none";
   config.loop.vocabulary = (test::scratchDir("SlamLoop_MissingVocabulary") / "nope.bin").string();
   SystemOptions options;
   options.deterministic = true;

@@ -10,6 +10,7 @@
 #include <spdlog/spdlog.h>
 
 #include "commands.hpp"
+#include "detector_options.hpp"
 #include "run_slam.hpp"
 #include "vslam/core/error.hpp"
 #include "vslam/io/sequence.hpp"
@@ -21,7 +22,7 @@ struct RunCommandOptions {
   std::string seq;
   SequenceOptions sequence;
   RunOptions pipeline;
-  std::string detector;  // "" = the config's detector.model
+  DetectorOptions detector;  // overrides the config's detector section
   std::string vocabulary;  // "" = the config's loop.vocabulary
   bool no_loop = false;
   bool no_final_ba = false;
@@ -66,7 +67,7 @@ int run(RunCommandOptions options) {
   const size_t total_frames = sequence.frames.size();
   if (options.max_frames > 0 && static_cast<size_t>(options.max_frames) < total_frames)
     sequence.frames.resize(options.max_frames);
-  if (!options.detector.empty()) sequence.config.detector.model = options.detector;
+  applyDetectorOptions(options.detector, sequence.config.detector);
   if (!options.vocabulary.empty()) sequence.config.loop.vocabulary = options.vocabulary;
   if (options.no_loop) sequence.config.loop.enabled = false;
   if (options.no_final_ba) sequence.config.loop.final_ba = false;
@@ -135,8 +136,7 @@ Command addRunCommand(CLI::App& app) {
       ->check(CLI::IsMember({"mono", "rgbd"}))
       ->capture_default_str();
   cli->add_option("--out", options->pipeline.out_dir, "Output folder (default: runs/<sequence>-<date>-<time>)");
-  cli->add_option("--detector", options->detector,
-                  "Object detector model, or 'none' (default: the config's detector.model)");
+  addDetectorOptions(*cli, options->detector);
   cli->add_option("--vocabulary", options->vocabulary,
                   "Place-recognition vocabulary (ours or DBoW2's ORBvoc.txt) for relocalisation and loop closing "
                   "(default: the config's loop.vocabulary, vocab/orbvoc.bin)");

@@ -4,8 +4,8 @@ namespace vslam::app {
 
 void addDetectorOptions(CLI::App& command, DetectorOptions& options) {
   command.add_option("--detector", options.model,
-                     "Detector model: yolo-fastest-1.1-xl (default), yolo-fastest-1.1, yolov4, yolov4-tiny; "
-                     "'none' turns detection off");
+                     "Detector model: yolo-fastest-1.1-xl, yolo-fastest-1.1, yolov4, yolov4-tiny; 'none' turns detection "
+                     "off (default: the config's detector.model, yolo-fastest-1.1-xl)");
   command.add_option("--detector-cfg", options.cfg, "Darknet cfg file (overrides the model's)");
   command.add_option("--detector-weights", options.weights, "Darknet weights file (overrides the model's)");
   command.add_option("--detector-names", options.names, "Class names file, one a line (overrides the model's)");
@@ -14,7 +14,7 @@ void addDetectorOptions(CLI::App& command, DetectorOptions& options) {
   command.add_option("--nms", options.nms, "Non-maximum suppression IoU threshold in [0, 1]");
   command.add_option("--min-box-px", options.min_box_px, "Skip boxes narrower or lower than this (paper: 64)");
   command.add_option("--box-features", options.box_features,
-                     "ORB features asked for inside each box (default 0: the frame's n_features, as in the paper)");
+                     "ORB features asked for inside each box (default 250; 0: the frame's n_features)");
   command.add_option("--dnn-target", options.dnn_target, "cpu (default), opencl or cuda, where OpenCV supports it");
   command.add_option("--dynamic-classes", options.dynamic_classes,
                      "Comma-separated classes whose keypoints are removed, e.g. person,car")

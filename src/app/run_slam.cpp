@@ -157,6 +157,38 @@ void renderRun(const std::string& out_dir) {
   }
 }
 
+// The object landmarks in the layout render/run_renders.hpp reads.
+void writeObjectsJson(const std::string& path, const std::vector<ObjectLandmark>& objects) {
+  auto vec3 = [](const Vec3& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
+  nlohmann::json list = nlohmann::json::array();
+  for (const ObjectLandmark& object : objects)
+    list.push_back({{"class", object.class_name},
+                    {"class_id", object.class_id},
+                    {"confidence", object.confidence},
+                    {"centroid", vec3(object.centroid)},
+                    {"box_min", vec3(object.box_min)},
+                    {"box_max", vec3(object.box_max)},
+                    {"points", static_cast<int>(object.point_ids.size())},
+                    {"keyframes", object.keyframe_ids}});
+  std::ofstream out(path);
+  if (!out) throw InputError(path, 0, "cannot write the object map");
+  out << list.dump(2) << "\n";
+}
+
+nlohmann::json detectorJson(const DetectionSummary& summary) {
+  if (!summary.enabled) return {{"model", "none"}};
+  return {{"model", summary.model},
+          {"cfg", summary.cfg},
+          {"input_size", summary.input_size},
+          {"median_ms", summary.median_ms},
+          {"wait_median_ms", summary.wait_median_ms},
+          {"keypoints_added_per_frame", summary.keypoints_added_per_frame},
+          {"keypoints_added_total", summary.keypoints_added_total},
+          {"keypoints_removed_per_frame", summary.keypoints_removed_per_frame},
+          {"boxes_used_per_frame", summary.boxes_used_per_frame},
+          {"frames", summary.frames}};
+}
+
 }  // namespace
 
 int runSlam(const Sequence& sequence, const RunOptions& options) {
@@ -179,14 +211,23 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   spdlog::info("running {} ({} frames, {}, {}) into {}", sequence.name, end - begin, options.mode,
                options.deterministic ? "deterministic" : "threaded", out_dir);
   const auto start = std::chrono::steady_clock::now();
+  std::vector<double> tracked_points;  // map points tracked in each tracked frame
   {
     FramePrefetcher prefetcher(sequence, begin, end, !mono);
-    LoadedFrame loaded;
+    LoadedFrame loaded, ahead;
     size_t processed = 0;
-    while (prefetcher.next(loaded)) {
+    bool have_loaded = prefetcher.next(loaded);
+    while (have_loaded) {
       if (!loaded.error.empty()) throw InputError(loaded.error);
+      // Detection of the next frame runs on its own thread while this one is tracked.
+      const bool have_ahead = prefetcher.next(ahead);
+      if (have_ahead && ahead.error.empty())
+        system.submitAhead(sequence.frames[ahead.position].index, ahead.image);
       const FrameEntry& entry = sequence.frames[loaded.position];
-      system.processFrame(entry.index, entry.timestamp, loaded.image, loaded.depth);
+      if (system.processFrame(entry.index, entry.timestamp, loaded.image, loaded.depth))
+        tracked_points.push_back(system.lastTrackedPoints());
+      loaded = std::move(ahead);
+      have_loaded = have_ahead;
       ++processed;
       if (processed % 50 == 0 || processed == end - begin) {
         const SystemStats stats = system.stats();
@@ -208,6 +249,8 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   std::vector<PlyPoint> cloud;
   for (const ExportedMapPoint& point : system.mapPoints()) cloud.push_back({point.position, point.bgr, point.class_id});
   writeMapPly(out_dir + "/map.ply", cloud);
+  const std::vector<ObjectLandmark> objects = system.objectMap();
+  writeObjectsJson(out_dir + "/objects.json", objects);
 
   const SystemStats stats = system.stats();
   const std::vector<int> lost = system.lostFrameIndices();
@@ -258,6 +301,9 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   for (const auto& [stage, s] : system.timer().summary())
     stage_ms[stage] = {{"median", s.median_ms}, {"p95", s.p95_ms}, {"mean", s.mean_ms}, {"count", s.count}};
   report["stage_ms"] = stage_ms;
+  report["detector"] = detectorJson(system.detectionSummary());
+  report["objects"] = static_cast<int>(objects.size());
+  report["tracked_points_per_frame"] = percentile(tracked_points, 0.5);  // median over tracked frames
   report["wall_s"] = wall_s;
   report["fps"] = wall_s > 0 ? stats.frames / wall_s : 0.0;
   report["peak_rss_mb"] = peakRssMb();
@@ -289,6 +335,12 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
     if (summary.count(stage))
       std::printf("%s: median %.1f ms, p95 %.1f ms, %zu times\n", stage, summary.at(stage).median_ms,
                   summary.at(stage).p95_ms, summary.at(stage).count);
+  const DetectionSummary detection = system.detectionSummary();
+  if (detection.enabled)
+    std::printf("detector: %s at %d, median %.1f ms per frame (Tracking waited %.1f), %.0f keypoints added per "
+                "frame; %zu objects\n",
+                detection.model.c_str(), detection.input_size, detection.median_ms, detection.wait_median_ms,
+                detection.keypoints_added_per_frame, objects.size());
   std::cout << "output: " << out_dir << "\n";
   std::fflush(stdout);
   return 0;

@@ -1,11 +1,13 @@
 #include "vslam/slam/frame_builder.hpp"
 
+#include <chrono>
+
 #include <opencv2/imgproc.hpp>
 
 namespace vslam {
 
-FrameBuilder::FrameBuilder(const Config& config, const PinholeCamera& camera)
-    : config_(config), camera_(camera), extractor_(config.orb) {
+FrameBuilder::FrameBuilder(const Config& config, const PinholeCamera& camera, std::vector<int> dynamic_class_ids)
+    : config_(config), camera_(camera), extractor_(config.orb), dynamic_class_ids_(std::move(dynamic_class_ids)) {
   pyramid_.levels = extractor_.levels();
   pyramid_.scale_factor = config.orb.scale_factor;
   pyramid_.scale = extractor_.scaleFactors();
@@ -15,7 +17,8 @@ FrameBuilder::FrameBuilder(const Config& config, const PinholeCamera& camera)
 }
 
 Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m,
-                          int n_features) const {
+                          int n_features, const std::vector<Detection>* detections,
+                          FrameFilterResult* filter) const {
   Frame frame;
   frame.id = id;
   frame.index = index;
@@ -30,6 +33,22 @@ Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& b
     gray = bgr;
   const ImagePyramid image_pyramid = extractor_.buildPyramid(gray);
   extractor_.extract(image_pyramid, frame.keypoints, frame.descriptors, cv::Rect(), n_features);
+  if (detections) {
+    const auto start = std::chrono::steady_clock::now();
+    // Per box: the configured count (or the frame's), on the same pyramid, as Algorithm 1 asks.
+    const int per_box = featuresPerBox(config_.detector, config_.orb);
+    std::vector<KeypointLabel> labels;
+    const KeypointFilterStats stats =
+        applyKeypointFilter(gray.size(), *detections, config_.detector.min_box_px, dynamic_class_ids_,
+                            orbBoxExtractor(extractor_, image_pyramid, per_box), frame.keypoints, frame.descriptors,
+                            labels);
+    frame.labels.resize(labels.size());
+    for (size_t i = 0; i < labels.size(); ++i) frame.labels[i] = {labels[i].class_id, labels[i].detection_id};
+    if (filter) {
+      filter->stats = stats;
+      filter->ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    }
+  }
 
   std::vector<cv::Point2f> distorted(frame.keypoints.size());
   for (size_t i = 0; i < frame.keypoints.size(); ++i) distorted[i] = frame.keypoints[i].pt;

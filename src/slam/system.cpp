@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "vslam/detect/detection_stage.hpp"
 #include "vslam/map/map.hpp"
 #include "vslam/place/keyframe_database.hpp"
 #include "vslam/place/vocabulary.hpp"
@@ -16,7 +17,9 @@ System::System(const Config& config, const SystemOptions& options)
     : config_(config),
       options_(options),
       map_(std::make_unique<Map>()),
-      frame_builder_(std::make_unique<FrameBuilder>(config, config.camera)),
+      detection_(makeDetectionStage(config.detector, &timer_)),
+      frame_builder_(std::make_unique<FrameBuilder>(config, config.camera,
+                                                    detection_ ? detection_->dynamicClassIds() : std::vector<int>())),
       local_mapping_(std::make_unique<LocalMapping>(config, *map_, &timer_)),
       tracking_(std::make_unique<Tracking>(config, *map_, *local_mapping_, &timer_, options.deterministic)) {
   // An empty vocabulary path switches place recognition off; a bad file is an input error.
@@ -39,16 +42,37 @@ System::System(const Config& config, const SystemOptions& options)
 
 System::~System() { finish(); }
 
+void System::submitAhead(int index, const cv::Mat& image) {
+  if (!detection_ || detection_submitted_.count(index)) return;
+  detection_->submit(index, image);
+  detection_submitted_.insert(index);
+}
+
 bool System::processFrame(int index, double timestamp, const cv::Mat& image, const cv::Mat& depth_m) {
   ScopedStage total(&timer_, "frame");
+  std::vector<Detection> detections;
+  if (detection_) {
+    ScopedStage wait(&timer_, "detect_wait");
+    if (!detection_submitted_.count(index)) detection_->submit(index, image);
+    detection_submitted_.erase(index);
+    detections = detection_->wait(index);
+  }
   Frame frame;
+  FrameFilterResult filter;
   {
     ScopedStage stage(&timer_, "extract");
     // Monocular initialisation matches only the finest level: extract twice the
     // features until the map exists, as ORB-SLAM does.
     const bool initialising = tracking_->state() == TrackingState::NotInitialized;
     const int n_features = initialising ? 2 * config_.orb.n_features : -1;
-    frame = frame_builder_->build(next_frame_id_++, index, timestamp, image, depth_m, n_features);
+    frame = frame_builder_->build(next_frame_id_++, index, timestamp, image, depth_m, n_features,
+                                  detection_ ? &detections : nullptr, &filter);
+  }
+  if (detection_) {
+    timer_.record("filter", filter.ms);
+    keypoints_added_.push_back(filter.stats.keypoints_added);
+    keypoints_removed_.push_back(filter.stats.keypoints_removed_dynamic);
+    boxes_used_.push_back(filter.stats.boxes_used);
   }
   bool tracked;
   {
@@ -149,6 +173,46 @@ SystemStats System::stats() const {
   stats.culled_keyframes = local_mapping_->culledKeyFrames();
   stats.relocalisations = tracking_->relocalisations();
   return stats;
+}
+
+DetectionSummary System::detectionSummary() const {
+  DetectionSummary summary;
+  if (!detection_) return summary;
+  auto median = [](const std::vector<int>& values) {
+    return percentile(std::vector<double>(values.begin(), values.end()), 0.5);
+  };
+  summary.enabled = true;
+  summary.model = detection_->files().name;
+  summary.cfg = detection_->files().cfg;
+  summary.input_size = detection_->params().input_size;
+  summary.frames = static_cast<int>(keypoints_added_.size());
+  summary.median_ms = percentile(timer_.samples("detect"), 0.5);
+  summary.wait_median_ms = percentile(timer_.samples("detect_wait"), 0.5);
+  summary.keypoints_added_per_frame = median(keypoints_added_);
+  summary.keypoints_removed_per_frame = median(keypoints_removed_);
+  summary.boxes_used_per_frame = median(boxes_used_);
+  for (int added : keypoints_added_) summary.keypoints_added_total += added;
+  return summary;
+}
+
+std::vector<ObjectLandmark> System::objectMap(const ObjectMapParams& params) const {
+  if (!detection_) return {};
+  std::vector<LabelledPoint> labelled;
+  std::vector<double> depths;  // keyframe-to-point distances: the scene's scale
+  {
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    for (MapPoint* point : map_->mapPoints()) {
+      LabelledPoint entry{point->id(), point->position(), point->classId(), point->classConfidence(), {}};
+      for (const auto& [keyframe, keypoint] : point->observations()) {
+        if (keyframe->isBad()) continue;
+        depths.push_back((point->position() - keyframe->cameraCentre()).norm());
+        entry.keyframe_ids.push_back(keyframe->id());
+      }
+      if (entry.class_id >= 0) labelled.push_back(std::move(entry));
+    }
+  }
+  const double link_distance = linkDistanceFor(percentile(std::move(depths), 0.5), params);
+  return buildObjectMap(labelled, link_distance, params, detection_->classNames());
 }
 
 int System::lastTrackedPoints() const { return tracking_->lastTrackedPoints(); }

@@ -72,7 +72,10 @@ struct DetectorParams {
   double confidence_threshold = 0.4;
   double nms_threshold = 0.45;
   int min_box_px = 64;   // paper's Algorithm 1: skip boxes narrower or lower than this
-  int box_features = 0;  // ORB features asked for inside each box; 0: orb.n_features, as the paper reruns the same extractor
+  // ORB features asked for inside each box (same pyramid as the frame); 0: orb.n_features.
+  // 250 adds ~400 keypoints a frame on fr1_xyz; the frame's 1000 per box added
+  // ~1300 and made extraction and tracking slower for no better ATE (docs/DETECTOR.md).
+  int box_features = 250;
   std::string dnn_target = "cpu";  // cpu | opencl | cuda
   std::vector<std::string> dynamic_classes;  // keypoints in these boxes are removed
 };

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "vslam/core/config.hpp"
+#include "vslam/core/stage_timer.hpp"
 #include "vslam/detect/async_detector.hpp"
 #include "vslam/detect/detector.hpp"
 
@@ -15,8 +16,9 @@ namespace vslam {
 class DetectionStage {
  public:
   // Locates and loads the model, checks its weights and the dynamic class
-  // names; throws InputError for any of them.
-  explicit DetectionStage(const DetectorParams& params);
+  // names; throws InputError for any of them. With a `timer`, each frame's
+  // network time is recorded as stage "detect" (on the detection thread).
+  explicit DetectionStage(const DetectorParams& params, StageTimer* timer = nullptr);
 
   void submit(int frame_index, const cv::Mat& bgr) { async_->submit(frame_index, bgr); }
   std::vector<Detection> wait(int frame_index) { return async_->wait(frame_index); }
@@ -35,6 +37,6 @@ class DetectionStage {
 };
 
 // nullptr when params.model is "none": Tracking then behaves as plain ORB-SLAM.
-std::unique_ptr<DetectionStage> makeDetectionStage(const DetectorParams& params);
+std::unique_ptr<DetectionStage> makeDetectionStage(const DetectorParams& params, StageTimer* timer = nullptr);
 
 }  // namespace vslam

@@ -6,19 +6,31 @@
 #include <opencv2/core.hpp>
 
 #include "vslam/core/config.hpp"
+#include "vslam/detect/detector.hpp"
+#include "vslam/detect/keypoint_filter.hpp"
 #include "vslam/feature/orb_extractor.hpp"
 #include "vslam/map/frame.hpp"
 
 namespace vslam {
 
+// What the keypoint filter did to one frame, for the report.
+struct FrameFilterResult {
+  KeypointFilterStats stats;
+  double ms = 0.0;  // wall time of the filter (ORB in the boxes included)
+};
+
 class FrameBuilder {
  public:
-  FrameBuilder(const Config& config, const PinholeCamera& camera);
+  // `dynamic_class_ids`: classes whose boxes remove keypoints (DetectionStage::dynamicClassIds()).
+  FrameBuilder(const Config& config, const PinholeCamera& camera, std::vector<int> dynamic_class_ids = {});
 
   // `bgr` is the colour image (or grey, CV_8UC1); `depth_m` is CV_32F metres or
-  // empty; `n_features` < 0 means the configured number.
+  // empty; `n_features` < 0 means the configured number. With `detections`,
+  // the keypoint filter (Algorithm 1) runs on the frame's own pyramid and its
+  // outcome goes to `filter` (when given); without, no keypoint is labelled.
   Frame build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m = cv::Mat(),
-              int n_features = -1) const;
+              int n_features = -1, const std::vector<Detection>* detections = nullptr,
+              FrameFilterResult* filter = nullptr) const;
 
   const ScalePyramid& pyramid() const { return pyramid_; }
   const PinholeCamera& camera() const { return camera_; }
@@ -30,6 +42,7 @@ class FrameBuilder {
   OrbExtractor extractor_;
   ScalePyramid pyramid_;
   cv::Rect2f undistorted_bounds_;
+  std::vector<int> dynamic_class_ids_;
 };
 
 }  // namespace vslam

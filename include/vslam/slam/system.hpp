@@ -3,6 +3,7 @@
 // Local Mapping on its own (or synchronously in deterministic mode), and gives
 // back trajectories and the map for export.
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -11,6 +12,7 @@
 #include "vslam/core/config.hpp"
 #include "vslam/core/stage_timer.hpp"
 #include "vslam/core/types.hpp"
+#include "vslam/map/object_map.hpp"
 
 namespace vslam {
 
@@ -22,6 +24,7 @@ class Vocabulary;
 class KeyframeDatabase;
 class LoopClosing;
 struct LoopRecord;
+class DetectionStage;
 
 struct SystemOptions {
   bool deterministic = false;  // Local Mapping runs synchronously after each keyframe
@@ -53,6 +56,21 @@ struct SystemStats {
   int relocalisations = 0;
 };
 
+// The detector's part of a run, for report.json's "detector".
+struct DetectionSummary {
+  bool enabled = false;      // false: --detector none (plain ORB-SLAM)
+  std::string model;         // model name ("custom" for explicit cfg/weights)
+  std::string cfg;           // cfg file used
+  int input_size = 0;
+  int frames = 0;            // frames the keypoint filter ran on
+  double median_ms = 0.0;    // network time per frame (detection thread)
+  double wait_median_ms = 0.0;            // Tracking's time blocked on detection per frame
+  double keypoints_added_per_frame = 0.0;   // median, from boxes (Algorithm 1)
+  double keypoints_removed_per_frame = 0.0; // median, inside dynamic-class boxes
+  double boxes_used_per_frame = 0.0;        // median
+  long keypoints_added_total = 0;
+};
+
 class System {
  public:
   System(const Config& config, const SystemOptions& options);
@@ -61,7 +79,13 @@ class System {
   System& operator=(const System&) = delete;
 
   // Tracks one image (BGR or grey); `depth_m` CV_32F metres or empty. Returns true when tracked.
+  // With a detector, the frame's detections come first: those started by
+  // submitAhead(), else detection runs now and Tracking waits for all of it.
   bool processFrame(int index, double timestamp, const cv::Mat& image, const cv::Mat& depth_m = cv::Mat());
+  // Starts detection on a frame processFrame() will get next, so that the
+  // network runs on its own thread while Tracking works on the current frame.
+  // Does nothing without a detector or when that frame was already submitted.
+  void submitAhead(int index, const cv::Mat& image);
   // Lets Local Mapping and Loop Closing finish their queues, stops the
   // threads, then runs the final full bundle adjustment (config.loop.final_ba).
   void finish();
@@ -76,6 +100,10 @@ class System {
   // Trajectories as they were before the final full BA; empty when it did not run.
   const std::vector<StampedPose>& frameTrajectoryBeforeFinalBa() const { return frames_before_final_ba_; }
   const std::vector<StampedPose>& keyframeTrajectoryBeforeFinalBa() const { return keyframes_before_final_ba_; }
+  DetectionSummary detectionSummary() const;
+  // Object landmarks from the map points' classes (empty without a detector);
+  // the link distance is relative to the median keyframe-to-point depth.
+  std::vector<ObjectLandmark> objectMap(const ObjectMapParams& params = ObjectMapParams()) const;
   int lastTrackedPoints() const;
   StageTimer& timer() { return timer_; }
 
@@ -86,6 +114,7 @@ class System {
   std::unique_ptr<Map> map_;
   std::unique_ptr<Vocabulary> vocabulary_;  // null: no relocalisation by BoW, no loop closing
   std::unique_ptr<KeyframeDatabase> database_;
+  std::unique_ptr<DetectionStage> detection_;  // nullptr for --detector none; before frame_builder_, which uses its class ids
   std::unique_ptr<FrameBuilder> frame_builder_;
   std::unique_ptr<LocalMapping> local_mapping_;
   std::unique_ptr<Tracking> tracking_;
@@ -93,6 +122,9 @@ class System {
   std::vector<StampedPose> frames_before_final_ba_, keyframes_before_final_ba_;
   long next_frame_id_ = 0;
   bool finished_ = false;
+  std::set<int> detection_submitted_;  // frames submitted to detection and not yet waited for
+  // Keypoint filter outcome per frame (Tracking's thread only).
+  std::vector<int> keypoints_added_, keypoints_removed_, boxes_used_;
 };
 
 }  // namespace vslam

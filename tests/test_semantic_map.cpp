@@ -1,0 +1,246 @@
+// The semantic part of the pipeline: object landmarks from labelled points
+// (synthetic), the keypoint filter inside FrameBuilder on a real frame, and
+// end-to-end runs of the System with the detector on fr1_xyz (deterministic).
+#include <algorithm>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "test_support.hpp"
+#include "vslam/detect/detector.hpp"
+#include "vslam/io/sequence.hpp"
+#include "vslam/map/object_map.hpp"
+#include "vslam/slam/frame_builder.hpp"
+#include "vslam/slam/system.hpp"
+
+namespace vslam {
+namespace {
+
+// `count` points of `class_id` spread uniformly in the box [lo, hi], ids from `first_id`.
+void addCluster(std::vector<LabelledPoint>& points, int class_id, long first_id, int count, const Vec3& lo,
+                const Vec3& hi, unsigned seed, std::vector<long> keyframes) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int i = 0; i < count; ++i) {
+    LabelledPoint point;
+    point.id = first_id + i;
+    for (int a = 0; a < 3; ++a) point.position[a] = lo[a] + unit(rng) * (hi[a] - lo[a]);
+    point.class_id = class_id;
+    point.confidence = 0.8;
+    point.keyframe_ids = keyframes;
+    points.push_back(point);
+  }
+}
+
+const std::vector<std::string> kNames = {"person", "chair", "tvmonitor"};
+
+TEST(ObjectMap, SeparatesClustersAndClasses) {
+  std::vector<LabelledPoint> points;
+  // Two chairs two metres apart, and a monitor touching the first chair: a
+  // different class must not merge with it.
+  addCluster(points, 1, 0, 200, Vec3(0, 0, 0), Vec3(0.5, 0.5, 0.5), 1, {0, 2});
+  addCluster(points, 1, 1000, 120, Vec3(2.5, 0, 0), Vec3(3.0, 0.4, 0.3), 2, {3, 5});
+  addCluster(points, 2, 2000, 80, Vec3(0.5, 0, 0), Vec3(0.9, 0.3, 0.1), 3, {2, 4});
+  // Two stray chair points and unlabelled points far away: not objects.
+  addCluster(points, 1, 3000, 2, Vec3(10, 10, 10), Vec3(10.01, 10.01, 10.01), 4, {7});
+  addCluster(points, -1, 4000, 50, Vec3(0, 0, 0), Vec3(3, 3, 3), 5, {1});
+  std::shuffle(points.begin(), points.end(), std::mt19937(9));  // input order must not matter
+
+  ObjectMapParams params;
+  const std::vector<ObjectLandmark> objects = buildObjectMap(points, 0.15, params, kNames);
+  ASSERT_EQ(objects.size(), 3u);
+  // Ordered by class, then smallest point id.
+  EXPECT_EQ(objects[0].class_name, "chair");
+  EXPECT_EQ(objects[0].point_ids.size(), 200u);
+  EXPECT_EQ(objects[0].keyframe_ids, (std::vector<long>{0, 2}));
+  EXPECT_EQ(objects[1].class_name, "chair");
+  EXPECT_EQ(objects[1].point_ids.size(), 120u);
+  EXPECT_EQ(objects[1].keyframe_ids, (std::vector<long>{3, 5}));
+  EXPECT_EQ(objects[2].class_name, "tvmonitor");
+  EXPECT_EQ(objects[2].class_id, 2);
+  EXPECT_EQ(objects[2].point_ids.size(), 80u);
+  EXPECT_NEAR(objects[2].confidence, 0.8, 1e-12);
+
+  // 5-95 % boxes of uniform points: inside the true box, covering most of it.
+  const Vec3 lo[3] = {Vec3(0, 0, 0), Vec3(2.5, 0, 0), Vec3(0.5, 0, 0)};
+  const Vec3 hi[3] = {Vec3(0.5, 0.5, 0.5), Vec3(3.0, 0.4, 0.3), Vec3(0.9, 0.3, 0.1)};
+  for (int k = 0; k < 3; ++k)
+    for (int a = 0; a < 3; ++a) {
+      const double extent = hi[k][a] - lo[k][a];
+      EXPECT_GE(objects[k].box_min[a], lo[k][a]) << k << " " << a;
+      EXPECT_LE(objects[k].box_min[a], lo[k][a] + 0.15 * extent) << k << " " << a;
+      EXPECT_LE(objects[k].box_max[a], hi[k][a]) << k << " " << a;
+      EXPECT_GE(objects[k].box_max[a], hi[k][a] - 0.15 * extent) << k << " " << a;
+      EXPECT_NEAR(objects[k].centroid[a], 0.5 * (lo[k][a] + hi[k][a]), 0.1 * extent) << k << " " << a;
+    }
+}
+
+TEST(ObjectMap, LinkDistanceDecidesWhatMerges) {
+  std::vector<LabelledPoint> points;
+  addCluster(points, 0, 0, 10, Vec3(0, 0, 0), Vec3(0.01, 0.01, 0.01), 1, {0});
+  addCluster(points, 0, 100, 10, Vec3(1, 0, 0), Vec3(1.01, 0.01, 0.01), 2, {1});
+  EXPECT_EQ(buildObjectMap(points, 0.5, ObjectMapParams(), kNames).size(), 2u);
+  EXPECT_EQ(buildObjectMap(points, 1.5, ObjectMapParams(), kNames).size(), 1u);
+  // Relative to the scene: the same map scaled by 10 with a 10x depth groups alike.
+  for (LabelledPoint& point : points) point.position *= 10.0;
+  ObjectMapParams params;
+  EXPECT_EQ(buildObjectMap(points, linkDistanceFor(10.0, params), params, kNames).size(), 2u);
+  EXPECT_TRUE(buildObjectMap(points, 0.0, params, kNames).empty());
+}
+
+TEST(ObjectMap, Percentile) {
+  EXPECT_DOUBLE_EQ(percentile({3, 1, 2}, 0.5), 2.0);
+  EXPECT_DOUBLE_EQ(percentile({0, 10}, 0.25), 2.5);
+  EXPECT_DOUBLE_EQ(percentile({}, 0.5), 0.0);
+}
+
+Sequence fr1Xyz() {
+  SequenceOptions options;
+  options.data_root = test::sharedData().string();
+  return openSequence("tum/fr1_xyz", options);
+}
+
+std::vector<std::string> cocoNames() {
+  return readClassNames((test::sharedModels() / "yolo-fastest-1.1" / "coco.names").string());
+}
+
+// A real fr1_xyz frame with a hand-placed box over the keyboard (the
+// detector's box there, rounded): Algorithm 1 adds labelled keypoints inside
+// it, and the dynamic variant removes every keypoint inside it instead.
+TEST(FrameBuilderFilter, AddsLabelledKeypointsOrRemovesDynamicOnes) {
+  const Sequence sequence = fr1Xyz();
+  const cv::Mat image = sequence.loadColor(0);
+  Config config = sequence.config;
+  Detection keyboard;
+  keyboard.id = 0;
+  keyboard.class_id = 66;
+  keyboard.class_name = "keyboard";
+  keyboard.confidence = 0.99f;
+  keyboard.box = cv::Rect2f(326, 331, 270, 139);
+  const std::vector<Detection> detections = {keyboard};
+  const cv::Rect box = cv::Rect(326, 331, 270, 139) & cv::Rect(0, 0, image.cols, image.rows);
+
+  const FrameBuilder plain(config, config.camera);
+  const Frame before = plain.build(0, 0, 0.0, image);
+  FrameFilterResult filter;
+  const Frame after = plain.build(0, 0, 0.0, image, cv::Mat(), -1, &detections, &filter);
+  EXPECT_EQ(filter.stats.boxes_used, 1);
+  EXPECT_GT(filter.stats.keypoints_added, 50);
+  EXPECT_EQ(after.size(), before.size() + filter.stats.keypoints_added);
+  ASSERT_EQ(after.labels.size(), after.size());
+  ASSERT_EQ(after.points.size(), after.size());
+  for (size_t i = 0; i < after.size(); ++i) {
+    const bool in_box = box.contains(cv::Point(static_cast<int>(after.keypoints[i].pt.x), static_cast<int>(after.keypoints[i].pt.y)));
+    EXPECT_EQ(after.labels[i].class_id, in_box ? 66 : -1) << i;
+  }
+  for (size_t i = before.size(); i < after.size(); ++i) EXPECT_EQ(after.labels[i].detection_id, 0);
+
+  const FrameBuilder dynamic(config, config.camera, {66});
+  FrameFilterResult removed;
+  const Frame without = dynamic.build(0, 0, 0.0, image, cv::Mat(), -1, &detections, &removed);
+  EXPECT_EQ(removed.stats.keypoints_added, 0);
+  EXPECT_GT(removed.stats.keypoints_removed_dynamic, 20);
+  EXPECT_EQ(without.size(), before.size() - removed.stats.keypoints_removed_dynamic);
+  for (const cv::KeyPoint& keypoint : without.keypoints)
+    EXPECT_FALSE(box.contains(cv::Point(static_cast<int>(keypoint.pt.x), static_cast<int>(keypoint.pt.y))));
+}
+
+struct SemanticRun {
+  std::vector<StampedPose> frames;
+  std::vector<ExportedMapPoint> points;
+  std::vector<ObjectLandmark> objects;
+  DetectionSummary detection;
+};
+
+// Deterministic run over the first `count` frames, submitting each next frame
+// to detection ahead as `vslam run` does.
+SemanticRun runFirstFrames(const Sequence& sequence, const DetectorParams& detector, size_t count) {
+  Config config = sequence.config;
+  config.detector = detector;
+  SystemOptions options;
+  options.deterministic = true;
+  System system(config, options);
+  cv::Mat image = sequence.loadColor(0);
+  for (size_t i = 0; i < count; ++i) {
+    cv::Mat next;
+    if (i + 1 < count) {
+      next = sequence.loadColor(i + 1);
+      system.submitAhead(sequence.frames[i + 1].index, next);
+    }
+    system.processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, image);
+    image = next;
+  }
+  system.finish();
+  return {system.frameTrajectory(), system.mapPoints(), system.objectMap(), system.detectionSummary()};
+}
+
+int countClass(const std::vector<ExportedMapPoint>& points, int class_id) {
+  return static_cast<int>(std::count_if(points.begin(), points.end(), [&](const auto& p) { return p.class_id == class_id; }));
+}
+
+TEST(SemanticSlam, DetectorAddsKeypointsAndLabelsTheMap) {
+  const Sequence sequence = fr1Xyz();
+  const std::vector<std::string> names = cocoNames();
+  const int keyboard = static_cast<int>(std::find(names.begin(), names.end(), "keyboard") - names.begin());
+  DetectorParams detector = sequence.config.detector;
+  ASSERT_EQ(detector.model, "yolo-fastest-1.1-xl");
+  const SemanticRun run = runFirstFrames(sequence, detector, 60);
+
+  ASSERT_TRUE(run.detection.enabled);
+  EXPECT_EQ(run.detection.frames, 60);
+  EXPECT_EQ(run.detection.input_size, 320);
+  EXPECT_GT(run.detection.median_ms, 0.0);
+  // The keyboard, monitor and chair boxes on fr1_xyz are all over 64 px.
+  EXPECT_GE(run.detection.boxes_used_per_frame, 2.0);
+  EXPECT_GT(run.detection.keypoints_added_per_frame, 100.0);
+  EXPECT_GE(run.frames.size(), 50u);
+
+  // The keyboard fills the lower right of every frame: many map points on it,
+  // and an object landmark of that class.
+  EXPECT_GT(countClass(run.points, keyboard), 30);
+  const auto keyboard_object = std::find_if(run.objects.begin(), run.objects.end(),
+                                            [](const ObjectLandmark& o) { return o.class_name == "keyboard"; });
+  ASSERT_NE(keyboard_object, run.objects.end());
+  EXPECT_GE(keyboard_object->point_ids.size(), 30u);
+  EXPECT_GE(keyboard_object->keyframe_ids.size(), 2u);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_LE(keyboard_object->box_min[a], keyboard_object->centroid[a]);
+    EXPECT_GE(keyboard_object->box_max[a], keyboard_object->centroid[a]);
+  }
+  for (const ObjectLandmark& object : run.objects) {
+    EXPECT_GT(object.confidence, 0.5);
+    EXPECT_LE(object.confidence, 1.0);
+  }
+}
+
+TEST(SemanticSlam, DynamicClassRemovesItsKeypoints) {
+  const Sequence sequence = fr1Xyz();
+  const std::vector<std::string> names = cocoNames();
+  const int keyboard = static_cast<int>(std::find(names.begin(), names.end(), "keyboard") - names.begin());
+  DetectorParams detector = sequence.config.detector;
+  detector.dynamic_classes = {"keyboard"};
+  const SemanticRun run = runFirstFrames(sequence, detector, 30);
+  EXPECT_GT(run.detection.keypoints_removed_per_frame, 20.0);
+  EXPECT_EQ(countClass(run.points, keyboard), 0);
+  for (const ObjectLandmark& object : run.objects) EXPECT_NE(object.class_name, "keyboard");
+}
+
+TEST(SemanticSlam, DetectorNoneLabelsNothingAndRepeats) {
+  const Sequence sequence = fr1Xyz();
+  DetectorParams detector;
+  detector.model = "none";
+  const SemanticRun first = runFirstFrames(sequence, detector, 40);
+  const SemanticRun second = runFirstFrames(sequence, detector, 40);
+  EXPECT_FALSE(first.detection.enabled);
+  EXPECT_TRUE(first.objects.empty());
+  ASSERT_FALSE(first.points.empty());
+  for (const ExportedMapPoint& point : first.points) EXPECT_EQ(point.class_id, -1);
+  ASSERT_EQ(first.frames.size(), second.frames.size());
+  for (size_t i = 0; i < first.frames.size(); ++i) {
+    EXPECT_EQ(first.frames[i].T_wc.t, second.frames[i].T_wc.t) << i;
+    EXPECT_EQ(first.frames[i].T_wc.R, second.frames[i].T_wc.R) << i;
+  }
+}
+
+}  // namespace
+}  // namespace vslam

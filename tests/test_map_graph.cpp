@@ -181,3 +181,26 @@ TEST_F(MapGraphTest, ScaleRangePredictsLevel) {
 
 }  // namespace
 }  // namespace vslam
+
+namespace vslam {
+namespace {
+
+// A rejected initialisation clears the map; the next map's first keyframe must
+// again be keyframe 0, the spanning tree's root (a parent cycle hung the
+// full bundle adjustment once).
+TEST_F(MapGraphTest, ClearedMapRestartsAtKeyFrameZeroWithoutParentCycle) {
+  map_.createKeyFrame(makeFrame(0, 10));
+  map_.createKeyFrame(makeFrame(1, 10));
+  map_.clear();
+  KeyFrame* a = map_.createKeyFrame(makeFrame(2, 100));
+  KeyFrame* b = map_.createKeyFrame(makeFrame(3, 100));
+  EXPECT_EQ(a->id(), 0);
+  for (int i = 0; i < 30; ++i) observe({a, b}, i);
+  a->updateConnections();
+  b->updateConnections();
+  EXPECT_EQ(a->parent(), nullptr);
+  EXPECT_EQ(b->parent(), a);
+}
+
+}  // namespace
+}  // namespace vslam

@@ -40,6 +40,10 @@ KeyFrame* Map::keyFrameById(long id) const {
 void Map::clear() {
   keyframes_.clear();
   map_points_.clear();
+  // A new map starts again at keyframe 0: the first keyframe anchors the gauge
+  // and roots the spanning tree, and is recognised by its id.
+  next_keyframe_id_ = 0;
+  next_map_point_id_ = 0;
   ++big_change_index_;
 }
 

@@ -75,6 +75,7 @@ void LocalMapping::reset() {
   queue_.clear();
   queue_cv_.wait(lock, [this] { return !processing_; });
   recent_points_.clear();
+  if (database_) database_->clear();  // keyframe ids restart with the new map
   accepting_.store(true);
 }
 

@@ -50,7 +50,8 @@ class Map {
   KeyFrame* keyFrameById(long id) const;
   long maxKeyFrameId() const { return next_keyframe_id_ - 1; }
 
-  // Destroys everything (a failed initialisation). Only when no thread holds pointers into the map.
+  // Destroys everything (a failed initialisation) and restarts the ids at 0.
+  // Only when no thread holds pointers or ids of the old map.
   void clear();
 
   // Monotonic counter of changes that invalidate tracking's references (loop corrections).

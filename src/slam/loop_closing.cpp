@@ -33,7 +33,6 @@ Sim3 toSim3(const SE3& T) { return Sim3(T); }
 // current keyframe and matches them by descriptor: more support for a loop.
 int searchLoopByProjection(const KeyFrame& current, const Sim3& S_cw, const std::vector<MapPoint*>& points,
                            std::vector<MapPoint*>& matched, double radius_px) {
-  const PinholeCamera& camera = current.camera();
   const ScalePyramid& pyramid = current.pyramid();
   std::unordered_set<const MapPoint*> already(matched.begin(), matched.end());
   // The camera centre in world coordinates under S_cw, for distance and viewing-angle checks.
@@ -41,15 +40,10 @@ int searchLoopByProjection(const KeyFrame& current, const Sim3& S_cw, const std:
   int added = 0;
   for (MapPoint* point : points) {
     if (!point || point->isBad() || already.count(point)) continue;
-    const Vec3 p_c = S_cw * point->position();
-    if (p_c.z() <= 0) continue;
-    const Vec2 px = camera.project(p_c);
-    if (!camera.inImage(px)) continue;
-    const Vec3 ray = point->position() - centre;
-    const double distance = ray.norm();
-    if (distance < point->minDistance() || distance > point->maxDistance()) continue;
-    if (ray.dot(point->normal()) < 0.5 * distance) continue;
-    const int level = point->predictLevel(distance, pyramid);
+    const std::optional<PredictedObservation> seen = predictObservation(*point, current, S_cw, centre);
+    if (!seen) continue;
+    const Vec2& px = seen->pixel;
+    const int level = seen->level;
     const double radius = radius_px * pyramid.scale[level];
     int best_distance = std::numeric_limits<int>::max();
     int best_index = -1;

@@ -276,23 +276,30 @@ int searchByBoW(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>
   return count;
 }
 
+std::optional<PredictedObservation> predictObservation(const MapPoint& point, const KeyFrame& keyframe,
+                                                       const Sim3& S_cw, const Vec3& centre_w) {
+  const Vec3 p_c = S_cw * point.position();
+  if (p_c.z() <= 0) return std::nullopt;
+  const Vec2 px = keyframe.camera().project(p_c);
+  if (!keyframe.camera().inImage(px)) return std::nullopt;
+  const Vec3 ray = point.position() - centre_w;
+  const double distance = ray.norm();
+  if (distance < point.minDistance() || distance > point.maxDistance()) return std::nullopt;
+  if (ray.dot(point.normal()) < 0.5 * distance) return std::nullopt;
+  return PredictedObservation{px, point.predictLevel(distance, keyframe.pyramid())};
+}
+
 int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius_factor) {
-  const PinholeCamera& camera = keyframe->camera();
   const ScalePyramid& pyramid = keyframe->pyramid();
-  const SE3& T_cw = keyframe->pose();
+  const Sim3 S_cw(keyframe->pose());
   const Vec3 centre = keyframe->cameraCentre();
   int fused = 0;
   for (MapPoint* point : points) {
     if (!point || point->isBad() || point->keypointIn(keyframe) >= 0) continue;
-    const Vec3 p_c = T_cw * point->position();
-    if (p_c.z() <= 0) continue;
-    const Vec2 px = camera.project(p_c);
-    if (!camera.inImage(px)) continue;
-    const Vec3 ray = point->position() - centre;
-    const double distance = ray.norm();
-    if (distance < point->minDistance() || distance > point->maxDistance()) continue;
-    if (ray.dot(point->normal()) < 0.5 * distance) continue;
-    const int level = point->predictLevel(distance, pyramid);
+    const std::optional<PredictedObservation> seen = predictObservation(*point, *keyframe, S_cw, centre);
+    if (!seen) continue;
+    const Vec2& px = seen->pixel;
+    const int level = seen->level;
     const double radius = radius_factor * pyramid.scale[level];
     const std::vector<int> candidates = keyframe->grid.featuresInArea(px.x(), px.y(), radius);
     int best_distance = std::numeric_limits<int>::max();

@@ -2,6 +2,7 @@
 // Matching between frames and the map: search by projection (last frame,
 // local map, keyframe), descriptor matching against a keyframe, and fusion of
 // duplicate map points. Callers hold the map lock (see map/map.hpp).
+#include <optional>
 #include <vector>
 
 #include "vslam/map/frame.hpp"
@@ -51,6 +52,17 @@ int searchByBoW(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>
 // whose descriptors agree and which satisfy the epipolar constraint of the two
 // keyframes' poses; candidates for triangulating new map points.
 std::vector<std::pair<int, int>> searchForTriangulation(const KeyFrame& kf1, const KeyFrame& kf2);
+
+// Where `point` would be observed by `keyframe` if the keyframe's world->camera
+// transform were S_cw (its own pose, or a loop-corrected one) with camera
+// centre `centre_w`: in front of the camera, inside the image, within the
+// point's scale range and viewing angle (60 degrees), at the predicted level.
+struct PredictedObservation {
+  Vec2 pixel;
+  int level = 0;
+};
+std::optional<PredictedObservation> predictObservation(const MapPoint& point, const KeyFrame& keyframe,
+                                                       const Sim3& S_cw, const Vec3& centre_w);
 
 // Projects `points` into `keyframe` and fuses each with the keyframe's
 // matching keypoint: adds an observation, or merges with the point already

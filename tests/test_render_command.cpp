@@ -20,6 +20,12 @@
 namespace vslam {
 namespace {
 
+// The estimate is the ground truth seen through this similarity (a monocular
+// run's arbitrary frame and scale); the renders align it back.
+Sim3 slamFromWorld() {
+  return Sim3(0.5, Eigen::AngleAxisd(M_PI / 6, Vec3::UnitZ()).toRotationMatrix(), Vec3(1, 2, 3));
+}
+
 namespace fs = std::filesystem;
 
 int colourDistance(const cv::Vec3b& a, const cv::Scalar& b) {
@@ -48,7 +54,7 @@ RunFolder writeRunFolder(const std::string& scratch_name) {
   run.dir = test::scratchDir(scratch_name) / "run";
   fs::create_directories(run.dir);
   // The SLAM frame: scale 0.5, 30° about z, shifted; timestamps 5 ms off the ground truth's.
-  const Sim3 slam_from_world(0.5, Eigen::AngleAxisd(M_PI / 6, Vec3::UnitZ()).toRotationMatrix(), Vec3(1, 2, 3));
+  const Sim3 slam_from_world = slamFromWorld();
   std::ofstream groundtruth(run.dir / "gt.txt"), trajectory(run.dir / "trajectory.txt"),
       keyframes(run.dir / "keyframes.txt");
   for (std::ofstream* file : {&groundtruth, &trajectory, &keyframes}) *file << std::setprecision(12);
@@ -106,8 +112,18 @@ TEST(RenderCommand, WritesFiguresOfARunFolder) {
 
   // The map's top view: the box's bottom edge (in the image) has the cup's colour.
   const cv::Mat map = cv::imread((out / "map_top.png").string());
-  const PlotProjection map_top = fitTopView({run.box_min, run.box_max}, map.size());
-  const Vec3 edge_middle(0.5 * (run.box_min.x() + run.box_max.x()), run.box_min.y(), run.box_max.z());
+  // The map is drawn aligned to the ground truth: the box becomes the
+  // axis-aligned box of its corners taken back through the similarity.
+  const Sim3 world_from_slam = slamFromWorld().inverse();
+  Vec3 low = Vec3::Constant(1e9), high = Vec3::Constant(-1e9);
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vec3 p(corner & 1 ? run.box_max.x() : run.box_min.x(), corner & 2 ? run.box_max.y() : run.box_min.y(),
+                 corner & 4 ? run.box_max.z() : run.box_min.z());
+    low = low.cwiseMin(world_from_slam * p);
+    high = high.cwiseMax(world_from_slam * p);
+  }
+  const PlotProjection map_top = fitTopView({low, high}, map.size());
+  const Vec3 edge_middle(0.5 * (low.x() + high.x()), low.y(), high.z());
   EXPECT_LE(colourDistance(pixelAt(map, map_top.toPixel(edge_middle)), classColour(kBoxClass)), 6);
 }
 

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <optional>
 #include <sstream>
 
 #include <Eigen/Geometry>
@@ -89,7 +91,7 @@ std::string resolveGroundTruth(const std::string& file, const fs::path& run_dir)
 // over the estimate's time span.
 TrajectoryPlotInput alignedTrajectory(const std::vector<StampedPose>& estimate,
                                       const std::vector<StampedPose>& groundtruth, bool with_scale,
-                                      double& ate_rmse_m) {
+                                      double& ate_rmse_m, std::optional<Sim3>& to_groundtruth) {
   TrajectoryPlotInput input;
   AteOptions options;
   options.alignment = with_scale ? Alignment::Sim3 : Alignment::SE3;
@@ -106,10 +108,31 @@ TrajectoryPlotInput alignedTrajectory(const std::vector<StampedPose>& estimate,
     input.error_m.push_back(ate.errors_m[i]);
   }
   ate_rmse_m = ate.rmse_m;
+  to_groundtruth = ate.alignment;
   const double first = estimate.front().timestamp - 0.5, last = estimate.back().timestamp + 0.5;
   for (const auto& pose : groundtruth)
     if (pose.timestamp >= first && pose.timestamp <= last) input.groundtruth.push_back(pose.T_wc.t);
   return input;
+}
+
+// Moves the whole map by the similarity S (estimate -> ground-truth frame);
+// object boxes become the axis-aligned boxes of their moved corners.
+void alignMap(const Sim3& S, MapRenderInput& map) {
+  for (MapRenderPoint& point : map.points) point.position = S * point.position;
+  for (MapRenderKeyframe& keyframe : map.keyframes)
+    keyframe.T_wc = SE3(S.R * keyframe.T_wc.R, S * keyframe.T_wc.t);
+  for (Vec3& position : map.trajectory) position = S * position;
+  for (MapRenderObject& object : map.objects) {
+    Vec3 low = Vec3::Constant(std::numeric_limits<double>::max()), high = -low;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3 p(corner & 1 ? object.box_max.x() : object.box_min.x(), corner & 2 ? object.box_max.y() : object.box_min.y(),
+                   corner & 4 ? object.box_max.z() : object.box_min.z());
+      low = low.cwiseMin(S * p);
+      high = high.cwiseMax(S * p);
+    }
+    object.box_min = low;
+    object.box_max = high;
+  }
 }
 
 // Ground truth in TUM format; another format (KITTI poses) is reported and skipped.
@@ -171,6 +194,9 @@ std::vector<std::string> renderRunFolder(const std::string& run_dir_text, const 
   if (fs::exists(run_dir / "report.json")) report = readReport((run_dir / "report.json").string());
 
   std::vector<StampedPose> estimate;
+  // The ATE's alignment, applied to the map too so that its axes are metres in
+  // the ground truth's frame (a monocular map has an arbitrary scale).
+  std::optional<Sim3> to_groundtruth;
   if (fs::exists(run_dir / "trajectory.txt")) estimate = readTumTrajectory((run_dir / "trajectory.txt").string());
   if (!estimate.empty()) {
     TrajectoryPlotInput input;
@@ -181,7 +207,7 @@ std::vector<std::string> renderRunFolder(const std::string& run_dir_text, const 
       groundtruth = readGroundTruth(groundtruth_path);
     }
     if (!groundtruth.empty()) {
-      input = alignedTrajectory(estimate, groundtruth, report.mode == "mono", computed_ate);
+      input = alignedTrajectory(estimate, groundtruth, report.mode == "mono", computed_ate, to_groundtruth);
     } else {
       if (groundtruth_path.empty()) spdlog::info("render: no groundtruth_file in report.json; plotting the estimate alone");
       for (const auto& pose : estimate) input.estimate.push_back(pose.T_wc.t);
@@ -205,6 +231,7 @@ std::vector<std::string> renderRunFolder(const std::string& run_dir_text, const 
       map.keyframes.push_back({keyframe.T_wc});
   if (fs::exists(run_dir / "objects.json")) map.objects = readObjects((run_dir / "objects.json").string());
   for (const auto& pose : estimate) map.trajectory.push_back(pose.T_wc.t);
+  if (to_groundtruth) alignMap(*to_groundtruth, map);
   if (!map.points.empty() || !map.keyframes.empty() || !map.objects.empty()) {
     auto count = [](size_t n, const char* noun) { return std::to_string(n) + " " + noun + (n == 1 ? "" : "s"); };
     map.title = titlePrefix(report) + " — map: " + count(map.points.size(), "point") + ", " +

@@ -69,7 +69,8 @@ class FramePrefetcher {
       frame.position = i;
       try {
         frame.image = sequence_.loadColor(i);
-        if (with_depth_) frame.depth = sequence_.loadDepthMeters(i);
+        // A frame without a paired depth image is tracked from colour alone.
+        if (with_depth_ && !sequence_.frames[i].depth_path.empty()) frame.depth = sequence_.loadDepthMeters(i);
       } catch (const std::exception& e) {
         frame.error = e.what();
       }
@@ -193,8 +194,6 @@ nlohmann::json detectorJson(const DetectionSummary& summary) {
 
 int runSlam(const Sequence& sequence, const RunOptions& options) {
   const bool mono = options.mode == "mono";
-  if (!mono && !sequence.hasDepth())
-    throw InputError(sequence.root, 0, "--mode rgbd needs depth images (depth.txt), and this sequence has none");
   const std::string out_dir = options.out_dir.empty() ? defaultOutDir(sequence.name) : options.out_dir;
   std::error_code error;
   fs::create_directories(out_dir, error);

@@ -39,9 +39,10 @@ std::string slurp(const fs::path& path) {
 Outcome vslam(const std::string& args, const std::string& env = "") {
   // One folder per test and call: ctest may run tests of this file in parallel.
   static int call = 0;
-  const fs::path dir =
-      test::scratchDir(std::string("cli_io_") + ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
-                       std::to_string(++call));
+  // Suite and name: CliRun and CliEval share test names.
+  const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const fs::path dir = test::scratchDir(std::string("cli_io_") + info->test_suite_name() + "_" + info->name() + "_" +
+                                        std::to_string(++call));
   const std::string command = "cd " + quoted(test::sourceDir().string()) + " && env -u VSLAM_DATA " + env + " " +
                               quoted(std::string(VSLAM_BINARY_DIR) + "/vslam") + " " + args + " > " +
                               quoted((dir / "out").string()) + " 2> " + quoted((dir / "err").string());

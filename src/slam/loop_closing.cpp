@@ -57,7 +57,7 @@ int searchLoopByProjection(const KeyFrame& current, const Sim3& S_cw, const std:
         best_index = j;
       }
     }
-    if (best_index >= 0 && best_distance <= kDescriptorLowThreshold) {
+    if (best_index >= 0 && best_distance <= kHammingThresholdLow) {
       matched[best_index] = point;
       ++added;
     }

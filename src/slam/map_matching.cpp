@@ -56,7 +56,7 @@ int searchByProjection(Frame& current, const Frame& last, double radius_px, bool
       if (current.map_points[j] && current.map_points[j]->observationCount() > 0) continue;
       best.offer(hammingDistance(descriptor, current.descriptors.ptr<uint8_t>(j)), j, current.keypoints[j].octave);
     }
-    if (best.best_index < 0 || best.best_distance > kDescriptorHighThreshold) continue;
+    if (best.best_index < 0 || best.best_distance > kHammingThresholdHigh) continue;
     current.map_points[best.best_index] = point;
     ++matches;
     if (check_orientation)
@@ -106,7 +106,7 @@ int searchLocalPoints(Frame& frame, const std::vector<MapPoint*>& points, double
       if (frame.map_points[j] && frame.map_points[j]->observationCount() > 0) continue;
       best.offer(hammingDistance(descriptor, frame.descriptors.ptr<uint8_t>(j)), j, frame.keypoints[j].octave);
     }
-    if (best.best_index < 0 || best.best_distance > kDescriptorHighThreshold) continue;
+    if (best.best_index < 0 || best.best_distance > kHammingThresholdHigh) continue;
     // Ambiguous when the runner-up at the same level is nearly as close.
     if (best.best_level == best.second_level && best.best_distance > 0.8 * best.second_distance) continue;
     frame.map_points[best.best_index] = point;
@@ -165,7 +165,7 @@ int searchByDescriptor(const KeyFrame& keyframe, const Frame& frame, std::vector
     BestTwo best;
     for (size_t j = 0; j < frame.size(); ++j)
       best.offer(hammingDistance(descriptor, frame.descriptors.ptr<uint8_t>(j)), static_cast<int>(j), 0);
-    if (best.best_index < 0 || best.best_distance > kDescriptorLowThreshold) continue;
+    if (best.best_index < 0 || best.best_distance > kHammingThresholdLow) continue;
     if (best.best_distance >= ratio * best.second_distance) continue;
     if (best.best_distance >= best_distance_at[best.best_index]) continue;
     if (!matches[best.best_index]) ++count;
@@ -226,7 +226,7 @@ int searchByBoW(const KeyFrame& keyframe, const Frame& frame, const FeatureVecto
         return true;
       },
       [&](int i, const BestTwo& best) {
-        if (best.best_index < 0 || best.best_distance > kDescriptorLowThreshold) return;
+        if (best.best_index < 0 || best.best_distance > kHammingThresholdLow) return;
         if (best.best_distance >= ratio * best.second_distance) return;
         if (matches[best.best_index]) return;
         matches[best.best_index] = keyframe.mapPoint(i);
@@ -261,7 +261,7 @@ int searchByBoW(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>
         return true;
       },
       [&](int i, const BestTwo& best) {
-        if (best.best_index < 0 || best.best_distance > kDescriptorLowThreshold) return;
+        if (best.best_index < 0 || best.best_distance > kHammingThresholdLow) return;
         if (best.best_distance >= ratio * best.second_distance) return;
         matches[i] = kf2.mapPoint(best.best_index);
         taken2[best.best_index] = true;
@@ -316,7 +316,7 @@ int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius
         best_index = j;
       }
     }
-    if (best_index < 0 || best_distance > kDescriptorLowThreshold) continue;
+    if (best_index < 0 || best_distance > kHammingThresholdLow) continue;
     MapPoint* existing = keyframe->mapPoint(best_index);
     if (existing && !existing->isBad()) {
       if (existing->observationCount() > point->observationCount())

@@ -11,9 +11,6 @@
 
 namespace vslam {
 
-// Hamming thresholds on 256-bit descriptors.
-constexpr int kDescriptorHighThreshold = 100;
-constexpr int kDescriptorLowThreshold = 50;
 
 // Projects the last frame's map points with the current frame's (predicted)
 // pose and matches them in a window of `radius_px` times the keypoint's scale.

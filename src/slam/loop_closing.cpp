@@ -29,6 +29,10 @@ constexpr int kLoopFullBaIterations = 10;
 
 Sim3 toSim3(const SE3& T) { return Sim3(T); }
 
+// Writes a solved full BA back into the map (under its lock).
+void mergeFullBundleAdjustment(Map& map, const std::vector<KeyFrame*>& keyframes, const std::vector<MapPoint*>& points,
+                               const BundleProblem& problem);
+
 // Projects `points` (not yet matched) with the similarity S_cw into the
 // current keyframe and matches them by descriptor: more support for a loop.
 int searchLoopByProjection(const KeyFrame& current, const Sim3& S_cw, const std::vector<MapPoint*>& points,
@@ -70,7 +74,8 @@ int searchLoopByProjection(const KeyFrame& current, const Sim3& S_cw, const std:
 // ---------------------------------------------------------------------------
 // Full bundle adjustment.
 
-FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations) {
+FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations,
+                                                   const FullBundleAdjustmentControl& control) {
   FullBundleAdjustmentResult summary;
   BundleProblem problem;
   std::vector<KeyFrame*> keyframes;
@@ -108,12 +113,25 @@ FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations) {
   options.iterations_first = iterations;
   options.iterations_second = 0;
   options.remove_outliers = false;
+  options.abort_flag = control.abort;
   const BundleResult result = bundleAdjust(*camera, 0.0, problem, options);
   summary.keyframes = static_cast<int>(keyframes.size());
   summary.points = static_cast<int>(points.size());
   summary.initial_cost = result.initial_cost;
   summary.final_cost = result.final_cost;
+  if (control.abort && control.abort->load()) return summary;
 
+  if (control.local_mapping) control.local_mapping->pause();
+  mergeFullBundleAdjustment(map, keyframes, points, problem);
+  if (control.local_mapping) control.local_mapping->resume();
+  summary.merged = true;
+  return summary;
+}
+
+namespace {
+
+void mergeFullBundleAdjustment(Map& map, const std::vector<KeyFrame*>& keyframes, const std::vector<MapPoint*>& points,
+                               const BundleProblem& problem) {
   std::lock_guard<std::mutex> lock(map.mutex());
   // Corrections T_new^-1 * T_old per optimised keyframe, to carry over to what was not optimised.
   KeyFrameMap<SE3> before, after;
@@ -155,8 +173,9 @@ FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations) {
     if (reference && !reference->isBad()) point->updateNormalAndDepth(reference->pyramid());
   }
   map.informBigChange();
-  return summary;
 }
+
+}  // namespace
 
 // ---------------------------------------------------------------------------
 // Thread plumbing.
@@ -203,6 +222,8 @@ void LoopClosing::finish() {
   }
   cv_.notify_all();
   thread_.join();
+  // The last loop's full BA is kept: it is the map's best state until the final BA.
+  if (full_ba_thread_.joinable()) full_ba_thread_.join();
 }
 
 void LoopClosing::run() {
@@ -237,6 +258,8 @@ void LoopClosing::process(long keyframe_id) {
     if (!candidates.empty()) found = computeSim3(current, candidates, loop);
   }
   if (!found) return;
+  // A full BA still running from an earlier loop would merge poses from before this correction.
+  abortFullBundleAdjustment();
   {
     ScopedStage stage(timer_, "loop_correction");
     local_mapping_.pause();
@@ -252,10 +275,28 @@ void LoopClosing::process(long keyframe_id) {
   }
   spdlog::info("loop closed: keyframe {} with keyframe {} ({} matches, scale {:.3f})", current->id(),
                loop.matched->id(), loop.inliers, loop.scale);
-  // Full BA on this thread: Tracking and Local Mapping go on meanwhile (the
-  // problem is solved without the map lock) and the result is merged.
-  ScopedStage stage(timer_, "full_ba");
-  runFullBundleAdjustment(map_, kLoopFullBaIterations);
+  startFullBundleAdjustment();
+}
+
+void LoopClosing::startFullBundleAdjustment() {
+  full_ba_abort_.store(false);
+  auto solve = [this] {
+    ScopedStage stage(timer_, "full_ba");
+    const FullBundleAdjustmentResult result =
+        runFullBundleAdjustment(map_, kLoopFullBaIterations, {&full_ba_abort_, &local_mapping_});
+    spdlog::debug("full BA after loop: {} keyframes, {} points, cost {:.1f} -> {:.1f}{}", result.keyframes,
+                  result.points, result.initial_cost, result.final_cost, result.merged ? "" : " (aborted)");
+  };
+  if (thread_.joinable())
+    full_ba_thread_ = std::thread(solve);
+  else
+    solve();  // deterministic mode
+}
+
+void LoopClosing::abortFullBundleAdjustment() {
+  if (!full_ba_thread_.joinable()) return;
+  full_ba_abort_.store(true);
+  full_ba_thread_.join();
 }
 
 // ---------------------------------------------------------------------------

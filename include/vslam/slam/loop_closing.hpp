@@ -39,14 +39,27 @@ struct FullBundleAdjustmentResult {
   int points = 0;
   double initial_cost = 0;
   double final_cost = 0;
+  bool merged = false;  // false when aborted (or nothing to optimise): the map was left as it was
+};
+
+// How a full BA shares the map with the other threads.
+struct FullBundleAdjustmentControl {
+  // Set by another thread to stop the solver after its current iteration; the
+  // result is then discarded (a newer loop correction made it stale).
+  const std::atomic<bool>* abort = nullptr;
+  // Paused while the result is merged, so that a local BA solved against the
+  // old poses cannot write them back afterwards.
+  LocalMapping* local_mapping = nullptr;
 };
 
 // Bundle adjustment of every live keyframe and map point, the first keyframe
 // fixed: the problem is copied under the map lock, solved without it, and
 // merged back under it. Keyframes created meanwhile follow their spanning-tree
 // parent's correction; points not in the problem follow their reference
-// keyframe. Used after a loop correction and as the final BA of a run.
-FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations);
+// keyframe. Used after a loop correction (on its own thread) and as the final
+// BA of a run.
+FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations,
+                                                   const FullBundleAdjustmentControl& control = {});
 
 class LoopClosing {
  public:
@@ -59,7 +72,8 @@ class LoopClosing {
 
   void processQueued();  // deterministic mode: on the caller's thread
   void start();          // threaded mode
-  void finish();         // processes what is queued, then stops the thread
+  // Processes what is queued, stops the thread, then waits for a running full BA to merge.
+  void finish();
 
   std::vector<LoopRecord> loops() const;
 
@@ -83,6 +97,11 @@ class LoopClosing {
   std::vector<KeyFrame*> detectCandidates(KeyFrame* current);
   bool computeSim3(KeyFrame* current, const std::vector<KeyFrame*>& candidates, LoopCandidate& loop);
   void correctLoop(KeyFrame* current, LoopCandidate& loop);
+  // The full BA after a correction: on its own thread in threaded mode, so that
+  // the next keyframes are checked for loops meanwhile; inline in deterministic mode.
+  void startFullBundleAdjustment();
+  // Stops a running full BA without merging it (its poses predate a new correction).
+  void abortFullBundleAdjustment();
 
   Config config_;
   Map& map_;
@@ -100,6 +119,9 @@ class LoopClosing {
   bool finish_requested_ = false;
   std::vector<LoopRecord> loops_;
   std::thread thread_;
+
+  std::thread full_ba_thread_;  // started and joined by the Loop Closing thread (or finish())
+  std::atomic<bool> full_ba_abort_{false};
 };
 
 }  // namespace vslam

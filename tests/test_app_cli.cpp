@@ -123,6 +123,26 @@ TEST(CliRun, DetectorWritesObjectsAndReport) {
   }
 }
 
+// Initialised at frame 3 with two keyframes: too few poses for an aligned ATE.
+// The run still succeeds and keeps its trajectory; the report says why there
+// is no ATE instead of failing after the work is done.
+TEST(CliRun, TooFewPosesForAnAteGiveANullAteAndExitZero) {
+  const fs::path out = test::scratchDir("cli_run_too_few_poses");
+  const Outcome run =
+      vslam("run --seq tum/fr1_xyz --max-frames 4 --detector none --deterministic --no-render --out " +
+            quoted(out.string()));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json report = nlohmann::json::parse(slurp(out / "report.json"));
+  EXPECT_EQ(report["keyframes"], 2);
+  EXPECT_TRUE(report["ate"].is_null());
+  EXPECT_TRUE(report["rpe"].is_null());
+  EXPECT_FALSE(report.contains("ate_before_final_ba"));
+  ASSERT_TRUE(report.contains("ate_unavailable"));
+  EXPECT_TRUE(contains(report["ate_unavailable"].get<std::string>(), "at least 3")) << report["ate_unavailable"];
+  EXPECT_TRUE(contains(run.out, "ATE: none")) << run.out;
+  EXPECT_EQ(readTumTrajectory((out / "keyframes.txt").string()).size(), 2u);
+}
+
 TEST(CliRun, DetectorNoneAndBadDetectorFiles) {
   const fs::path out = test::scratchDir("cli_run_detector_none");
   const Outcome none = vslam("run --seq tum/fr1_xyz --max-frames 30 --detector none --out " + quoted(out.string()));

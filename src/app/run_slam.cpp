@@ -274,18 +274,33 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
     report["groundtruth_source"] = sequence.groundtruth_path;
     report["groundtruth_file"] = "groundtruth.txt";  // in the run folder
   }
+  report["ate"] = nullptr;
+  report["rpe"] = nullptr;
+  // A run that tracked too little (fewer than 3 poses matched to the ground
+  // truth, or all in one place) has no ATE; that is a result, not an error.
   if (sequence.hasGroundTruth() && !keyframes.empty()) {
-    report["ate"]["keyframes"] = ateJson(keyframes, sequence, mono);
-    report["ate"]["frames"] = ateJson(trajectory, sequence, mono);
-    report["rpe"]["frames"] = rpeJson(trajectory, sequence, report["ate"]["frames"]["scale"].get<double>());
-  } else {
-    report["ate"] = nullptr;
-    report["rpe"] = nullptr;
+    try {
+      nlohmann::json ate, rpe;
+      ate["keyframes"] = ateJson(keyframes, sequence, mono);
+      ate["frames"] = ateJson(trajectory, sequence, mono);
+      rpe["frames"] = rpeJson(trajectory, sequence, ate["frames"]["scale"].get<double>());
+      report["ate"] = ate;
+      report["rpe"] = rpe;
+    } catch (const InputError& error) {
+      report["ate_unavailable"] = error.what();
+      spdlog::warn("no ATE for this run: {}", error.what());
+    }
   }
   const std::vector<StampedPose>& keyframes_before_ba = system.keyframeTrajectoryBeforeFinalBa();
-  if (sequence.hasGroundTruth() && !keyframes_before_ba.empty()) {
-    report["ate_before_final_ba"]["keyframes"] = ateJson(keyframes_before_ba, sequence, mono);
-    report["ate_before_final_ba"]["frames"] = ateJson(system.frameTrajectoryBeforeFinalBa(), sequence, mono);
+  if (report["ate"].is_object() && !keyframes_before_ba.empty()) {
+    try {
+      nlohmann::json before;
+      before["keyframes"] = ateJson(keyframes_before_ba, sequence, mono);
+      before["frames"] = ateJson(system.frameTrajectoryBeforeFinalBa(), sequence, mono);
+      report["ate_before_final_ba"] = before;
+    } catch (const InputError& error) {
+      spdlog::warn("no ATE before the final BA: {}", error.what());
+    }
   }
   report["final_ba"] = sequence.config.loop.final_ba;
   report["relocalisations"] = stats.relocalisations;
@@ -320,6 +335,8 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
                 report["ate"]["keyframes"]["scale"].get<double>(), report["ate"]["frames"]["rmse_m"].get<double>(),
                 report["ate"]["frames"]["pairs"].get<int>());
   }
+  if (report.contains("ate_unavailable"))
+    std::cout << "ATE: none (" << report["ate_unavailable"].get<std::string>() << ")\n";
   if (report.contains("ate_before_final_ba"))
     std::printf("ATE RMSE before final BA: keyframes %.4f m, frames %.4f m\n",
                 report["ate_before_final_ba"]["keyframes"]["rmse_m"].get<double>(),

@@ -134,7 +134,7 @@ TEST(DetectCommand, BadInputsAreOneLineErrors) {
   const fs::path scratch = test::scratchDir("detect_cli_errors");
   RunResult run = runVslam("detect --images /nonexistent/photo.jpg --out " + (scratch / "out").string(), scratch);
   EXPECT_EQ(run.exit_code, 2);
-  EXPECT_EQ(run.output, "error: /nonexistent/photo.jpg: no such image or folder\n");
+  EXPECT_EQ(run.output, "error: /nonexistent/photo.jpg: no such image file or folder\n");
 
   run = runVslam("detect --images " + (test::sharedData() / "images/dog.jpg").string() + " --detector yolov9", scratch);
   EXPECT_EQ(run.exit_code, 2);

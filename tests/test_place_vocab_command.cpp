@@ -81,11 +81,11 @@ TEST(PlaceVocabCommand, BuildIsReproducibleAndSkipsDepth) {
 TEST(PlaceVocabCommand, BadInputsAreOneLineErrors) {
   const fs::path out = test::scratchDir("place_cmd_bad");
   EXPECT_EQ(runVslam("vocab build --images /nonexistent/images --out " + (out / "v.vsv").string(), out), 2);
-  EXPECT_EQ(readAll(out / "stderr.txt"), "error: /nonexistent/images: no such file or directory\n");
+  EXPECT_EQ(readAll(out / "stderr.txt"), "error: /nonexistent/images: no such image file or folder\n");
 
   const fs::path empty = test::scratchDir("place_cmd_empty");
   EXPECT_EQ(runVslam("vocab build --images " + empty.string() + " --out " + (out / "v.vsv").string(), out), 2);
-  EXPECT_NE(readAll(out / "stderr.txt").find(empty.string() + ": no .png"), std::string::npos);
+  EXPECT_NE(readAll(out / "stderr.txt").find(empty.string() + ": folder holds no images (searched recursively, depth/ skipped)"), std::string::npos);
 
   std::ofstream(out / "not_a_vocabulary.txt") << "hello\n";
   EXPECT_EQ(runVslam("vocab info " + (out / "not_a_vocabulary.txt").string(), out), 2);

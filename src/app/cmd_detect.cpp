@@ -21,6 +21,7 @@
 #include "vslam/detect/detector.hpp"
 #include "vslam/detect/keypoint_filter.hpp"
 #include "vslam/detect/model_locator.hpp"
+#include "vslam/io/image_files.hpp"
 
 namespace vslam::app {
 namespace {
@@ -33,34 +34,6 @@ struct DetectArgs {
   bool filter_keypoints = false;
   DetectorOptions detector;
 };
-
-bool isImage(const fs::path& path) {
-  static const std::set<std::string> extensions = {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".ppm", ".pgm", ".webp"};
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return std::tolower(c); });
-  return extensions.count(extension) > 0;
-}
-
-// Every PATH is an image or a folder of images (not recursive, sorted by name).
-std::vector<fs::path> collectImages(const std::vector<std::string>& inputs) {
-  std::vector<fs::path> images;
-  for (const std::string& input : inputs) {
-    std::error_code error;
-    if (fs::is_directory(input, error)) {
-      std::vector<fs::path> found;
-      for (const auto& entry : fs::directory_iterator(input, error))
-        if (entry.is_regular_file(error) && isImage(entry.path())) found.push_back(entry.path());
-      if (found.empty()) throw InputError(input, 0, "folder holds no images (.jpg, .png, ...)");
-      std::sort(found.begin(), found.end());
-      images.insert(images.end(), found.begin(), found.end());
-    } else if (fs::is_regular_file(input, error)) {
-      images.emplace_back(input);
-    } else {
-      throw InputError(input, 0, "no such image or folder");
-    }
-  }
-  return images;
-}
 
 std::string defaultOutDir() {
   const std::time_t now = std::time(nullptr);
@@ -129,7 +102,7 @@ int runDetect(const DetectArgs& args) {
   DetectorParams params;
   applyDetectorOptions(args.detector, params);
   if (params.model == "none") throw InputError("vslam detect: --detector none leaves nothing to do; name a model");
-  const std::vector<fs::path> images = collectImages(args.inputs);
+  const std::vector<fs::path> images = listImages(args.inputs);  // folders: not recursive
   const ModelFiles files = locateModel(params);
   YoloDetector detector(params, files);
   const std::vector<int> dynamic_class_ids = classIdsOf(params.dynamic_classes, detector.classNames(), files.names);

@@ -19,6 +19,7 @@
 #include "vslam/core/config.hpp"
 #include "vslam/core/error.hpp"
 #include "vslam/feature/orb_extractor.hpp"
+#include "vslam/io/image_files.hpp"
 #include "vslam/place/vocabulary.hpp"
 
 namespace vslam::app {
@@ -34,45 +35,6 @@ struct BuildOptions {
   int features = Config{}.orb.n_features;
 };
 
-bool isImageFile(const fs::path& path) {
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension == ".png" || extension == ".jpg" || extension == ".jpeg";
-}
-
-// Every .png/.jpg/.jpeg under each input (a file or a directory searched
-// recursively), sorted by path within each input, inputs in the order given.
-// Folders named `depth` are skipped: in TUM sequences they hold 16-bit depth
-// maps beside rgb/, not photographs.
-std::vector<fs::path> collectImages(const std::vector<std::string>& inputs) {
-  std::vector<fs::path> images;
-  for (const std::string& input : inputs) {
-    std::error_code error;
-    const fs::file_status status = fs::status(input, error);
-    if (error || !fs::exists(status)) throw InputError(input, 0, "no such file or directory");
-    if (fs::is_regular_file(status)) {
-      if (!isImageFile(input)) throw InputError(input, 0, "not a .png, .jpg or .jpeg image");
-      images.emplace_back(input);
-      continue;
-    }
-    std::vector<fs::path> found;
-    for (auto it = fs::recursive_directory_iterator(input, fs::directory_options::follow_directory_symlink);
-         it != fs::recursive_directory_iterator(); ++it) {
-      if (it->is_directory() && it->path().filename() == "depth") {
-        it.disable_recursion_pending();
-        continue;
-      }
-      if (it->is_regular_file() && isImageFile(it->path())) found.push_back(it->path());
-    }
-    if (found.empty())
-      throw InputError(input, 0, "no .png, .jpg or .jpeg images in it (searched recursively, depth/ folders skipped)");
-    std::sort(found.begin(), found.end());
-    images.insert(images.end(), found.begin(), found.end());
-  }
-  return images;
-}
-
 // At most `max_images`, spread evenly over the list (first one included).
 std::vector<fs::path> evenlySpaced(const std::vector<fs::path>& images, int max_images) {
   if (max_images <= 0 || images.size() <= static_cast<size_t>(max_images)) return images;
@@ -87,7 +49,10 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 
 int runBuild(const BuildOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  const std::vector<fs::path> images = evenlySpaced(collectImages(options.inputs), options.max_images);
+  // Folders are searched recursively; TUM's depth/ folders hold 16-bit depth
+  // maps beside rgb/, not photographs.
+  const ImageListOptions training_images{/*recursive=*/true, /*skipped_folders=*/{"depth"}};
+  const std::vector<fs::path> images = evenlySpaced(listImages(options.inputs, training_images), options.max_images);
 
   OrbParams orb = Config{}.orb;
   orb.n_features = options.features;

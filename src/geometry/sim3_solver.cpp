@@ -6,8 +6,6 @@
 #include <random>
 
 #include <Eigen/Geometry>
-#include <ceres/ceres.h>
-#include <ceres/rotation.h>
 
 namespace vslam {
 namespace {
@@ -41,81 +39,6 @@ std::vector<bool> findInliers(const Sim3& S12, const Sim3Correspondences& m, con
     }
   }
   return inliers;
-}
-
-// Reprojection of both points of a correspondence through S12 = (s, R, t),
-// parameterised as angle-axis, t and log(s) (so that s stays positive).
-struct Sim3ReprojectionResidual {
-  Sim3ReprojectionResidual(const Vec3& point_1, const Vec3& point_2, const Vec2& pixel_1, const Vec2& pixel_2,
-                           const Mat3& K1, const Mat3& K2, double inv_sigma_1, double inv_sigma_2)
-      : point_1(point_1), point_2(point_2), pixel_1(pixel_1), pixel_2(pixel_2), K1(K1), K2(K2),
-        inv_sigma_1(inv_sigma_1), inv_sigma_2(inv_sigma_2) {}
-
-  template <typename T>
-  bool operator()(const T* angle_axis, const T* translation, const T* log_scale, T* residual) const {
-    const T scale = exp(log_scale[0]);
-    // Camera 2's point seen from camera 1: p1 = s R p2 + t.
-    const T p2[3] = {T(point_2.x()), T(point_2.y()), T(point_2.z())};
-    T rotated[3];
-    ceres::AngleAxisRotatePoint(angle_axis, p2, rotated);
-    const T in_1[3] = {scale * rotated[0] + translation[0], scale * rotated[1] + translation[1],
-                       scale * rotated[2] + translation[2]};
-    // Camera 1's point seen from camera 2: p2 = R^T (p1 - t) / s.
-    const T minus_angle_axis[3] = {-angle_axis[0], -angle_axis[1], -angle_axis[2]};
-    const T shifted[3] = {T(point_1.x()) - translation[0], T(point_1.y()) - translation[1],
-                          T(point_1.z()) - translation[2]};
-    T in_2[3];
-    ceres::AngleAxisRotatePoint(minus_angle_axis, shifted, in_2);
-    for (T& c : in_2) c /= scale;
-    project(K1, in_1, pixel_1, inv_sigma_1, residual);
-    project(K2, in_2, pixel_2, inv_sigma_2, residual + 2);
-    return true;
-  }
-
-  template <typename T>
-  static void project(const Mat3& K, const T* p, const Vec2& pixel, double inv_sigma, T* residual) {
-    residual[0] = T(inv_sigma) * (T(K(0, 0)) * p[0] / p[2] + T(K(0, 2)) - T(pixel.x()));
-    residual[1] = T(inv_sigma) * (T(K(1, 1)) * p[1] / p[2] + T(K(1, 2)) - T(pixel.y()));
-  }
-
-  Vec3 point_1, point_2;
-  Vec2 pixel_1, pixel_2;
-  Mat3 K1, K2;
-  double inv_sigma_1, inv_sigma_2;
-};
-
-Sim3 refineByReprojection(const Sim3& initial, const Sim3Correspondences& m, const std::vector<bool>& use,
-                          const Mat3& K1, const Mat3& K2, const Sim3SolverParams& params) {
-  double angle_axis[3];
-  const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> R_row = initial.R;
-  ceres::RotationMatrixToAngleAxis(ceres::RowMajorAdapter3x3(R_row.data()), angle_axis);
-  double translation[3] = {initial.t.x(), initial.t.y(), initial.t.z()};
-  double log_scale = std::log(initial.s);
-  ceres::Problem problem;
-  for (size_t i = 0; i < m.points_1.size(); ++i) {
-    if (!use[i]) continue;
-    auto* cost = new ceres::AutoDiffCostFunction<Sim3ReprojectionResidual, 4, 3, 3, 1>(new Sim3ReprojectionResidual(
-        m.points_1[i], m.points_2[i], m.pixels_1[i], m.pixels_2[i], K1, K2, 1.0 / std::sqrt(variance(m.sigma2_1, i)),
-        1.0 / std::sqrt(variance(m.sigma2_2, i))));
-    // Robust at the inlier bound, as ORB-SLAM's Sim(3) optimisation.
-    problem.AddResidualBlock(cost, new ceres::HuberLoss(std::sqrt(params.chi2_threshold)), angle_axis, translation,
-                             &log_scale);
-  }
-  if (problem.NumResidualBlocks() == 0) return initial;
-  if (params.fix_scale) problem.SetParameterBlockConstant(&log_scale);
-  ceres::Solver::Options options;
-  options.max_num_iterations = 10;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.num_threads = 1;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  if (!summary.IsSolutionUsable()) return initial;
-  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> R_refined;
-  ceres::AngleAxisToRotationMatrix(angle_axis, ceres::RowMajorAdapter3x3(R_refined.data()));
-  const Sim3 refined(params.fix_scale ? 1.0 : std::exp(log_scale), R_refined,
-                     Vec3(translation[0], translation[1], translation[2]));
-  const bool finite = std::isfinite(refined.s) && refined.R.allFinite() && refined.t.allFinite();
-  return finite ? refined : initial;
 }
 
 }  // namespace
@@ -186,16 +109,6 @@ Sim3Result solveSim3Ransac(const Sim3Correspondences& m, const Mat3& K1, const M
     best = refined;
     best_count = count;
     best_inliers = std::move(inliers);
-  }
-  if (params.refine_reprojection) {
-    const Sim3 refined = refineByReprojection(best, m, best_inliers, K1, K2, params);
-    int count = 0;
-    std::vector<bool> inliers = findInliers(refined, m, K1, K2, params.chi2_threshold, &count);
-    if (count >= best_count) {
-      best = refined;
-      best_count = count;
-      best_inliers = std::move(inliers);
-    }
   }
   result.S12 = best;
   result.inliers = std::move(best_inliers);

@@ -420,7 +420,6 @@ bool LoopClosing::computeSim3(KeyFrame* current, const std::vector<KeyFrame*>& c
     Sim3SolverParams ransac_params;
     ransac_params.iterations = kRansacIterations;
     ransac_params.min_inliers = kMinRansacInliers;
-    ransac_params.refine_reprojection = false;
     const Mat3 K = camera.Keigen();
     const Sim3Result ransac =
         solveSim3Ransac(correspondences, K, K, ransac_params, static_cast<uint32_t>(current->id()));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 #include "vslam/feature/matcher.hpp"
 
@@ -12,24 +13,17 @@ namespace {
 // Wider windows for points seen obliquely: their appearance is less stable.
 double radiusByViewingCos(double view_cos) { return view_cos > 0.998 ? 2.5 : 4.0; }
 
-struct BestTwo {
-  int best_distance = std::numeric_limits<int>::max();
-  int second_distance = std::numeric_limits<int>::max();
-  int best_index = -1;
-  int best_level = -1, second_level = -1;
-  void offer(int distance, int index, int level) {
-    if (distance < best_distance) {
-      second_distance = best_distance;
-      second_level = best_level;
-      best_distance = distance;
-      best_index = index;
-      best_level = level;
-    } else if (distance < second_distance) {
-      second_distance = distance;
-      second_level = level;
-    }
-  }
-};
+// Nearest and second-nearest to `descriptor` among the `candidates` that
+// `usable` accepts (feature::nearestTwo on the survivors; `scratch` is reused
+// across calls so that no search allocates per point).
+template <typename Usable>
+NearestTwo nearestUsable(const uint8_t* descriptor, const cv::Mat& descriptors, const std::vector<int>& candidates,
+                         Usable usable, std::vector<int>& scratch) {
+  scratch.clear();
+  for (int j : candidates)
+    if (usable(j)) scratch.push_back(j);
+  return nearestTwo(descriptor, descriptors, scratch);
+}
 
 }  // namespace
 
@@ -37,6 +31,7 @@ int searchByProjection(Frame& current, const Frame& last, double radius_px, bool
   const PinholeCamera& camera = *current.camera;
   const ScalePyramid& pyramid = *current.pyramid;
   RotationHistogram rotation;
+  std::vector<int> usable;
   int matches = 0;
   for (size_t i = 0; i < last.size(); ++i) {
     MapPoint* point = last.map_points[i];
@@ -51,16 +46,14 @@ int searchByProjection(Frame& current, const Frame& last, double radius_px, bool
         current.grid.featuresInArea(px.x(), px.y(), radius, std::max(0, last_level - 1), last_level + 1);
     if (candidates.empty()) continue;
     const uint8_t* descriptor = point->descriptor().ptr<uint8_t>();
-    BestTwo best;
-    for (int j : candidates) {
-      if (current.map_points[j] && current.map_points[j]->observationCount() > 0) continue;
-      best.offer(hammingDistance(descriptor, current.descriptors.ptr<uint8_t>(j)), j, current.keypoints[j].octave);
-    }
-    if (best.best_index < 0 || best.best_distance > kHammingThresholdHigh) continue;
-    current.map_points[best.best_index] = point;
+    const NearestTwo best = nearestUsable(
+        descriptor, current.descriptors, candidates,
+        [&](int j) { return !(current.map_points[j] && current.map_points[j]->observationCount() > 0); }, usable);
+    if (best.index < 0 || best.distance > kHammingThresholdHigh) continue;
+    current.map_points[best.index] = point;
     ++matches;
     if (check_orientation)
-      rotation.add(last.keypoints[i].angle, current.keypoints[best.best_index].angle, best.best_index);
+      rotation.add(last.keypoints[i].angle, current.keypoints[best.index].angle, best.index);
   }
   if (check_orientation)
     for (int j : rotation.rejectedMatches()) {
@@ -92,6 +85,7 @@ bool isInFrustum(MapPoint* point, const Frame& frame, double min_view_cos) {
 
 int searchLocalPoints(Frame& frame, const std::vector<MapPoint*>& points, double radius_factor) {
   const ScalePyramid& pyramid = *frame.pyramid;
+  std::vector<int> usable;
   int matches = 0;
   for (MapPoint* point : points) {
     if (!point->track_in_view || point->isBad()) continue;
@@ -101,15 +95,15 @@ int searchLocalPoints(Frame& frame, const std::vector<MapPoint*>& points, double
         frame.grid.featuresInArea(point->track_proj_x, point->track_proj_y, radius, level - 1, level);
     if (candidates.empty()) continue;
     const uint8_t* descriptor = point->descriptor().ptr<uint8_t>();
-    BestTwo best;
-    for (int j : candidates) {
-      if (frame.map_points[j] && frame.map_points[j]->observationCount() > 0) continue;
-      best.offer(hammingDistance(descriptor, frame.descriptors.ptr<uint8_t>(j)), j, frame.keypoints[j].octave);
-    }
-    if (best.best_index < 0 || best.best_distance > kHammingThresholdHigh) continue;
+    const NearestTwo best = nearestUsable(
+        descriptor, frame.descriptors, candidates,
+        [&](int j) { return !(frame.map_points[j] && frame.map_points[j]->observationCount() > 0); }, usable);
+    if (best.index < 0 || best.distance > kHammingThresholdHigh) continue;
     // Ambiguous when the runner-up at the same level is nearly as close.
-    if (best.best_level == best.second_level && best.best_distance > 0.8 * best.second_distance) continue;
-    frame.map_points[best.best_index] = point;
+    if (best.second_index >= 0 && frame.keypoints[best.index].octave == frame.keypoints[best.second_index].octave &&
+        best.distance > 0.8 * best.second_distance)
+      continue;
+    frame.map_points[best.index] = point;
     ++matches;
   }
   return matches;
@@ -121,6 +115,7 @@ int searchByProjection(Frame& frame, const KeyFrame& keyframe, const std::vector
   const ScalePyramid& pyramid = *frame.pyramid;
   const Vec3 centre = frame.cameraCentre();
   RotationHistogram rotation;
+  std::vector<int> usable;
   int matches = 0;
   for (size_t i = 0; i < keyframe.size(); ++i) {
     MapPoint* point = keyframe.mapPoint(i);
@@ -135,16 +130,12 @@ int searchByProjection(Frame& frame, const KeyFrame& keyframe, const std::vector
     const int level = point->predictLevel(distance, pyramid);
     const std::vector<int> candidates =
         frame.grid.featuresInArea(px.x(), px.y(), radius_px * pyramid.scale[level], level - 1, level + 1);
-    BestTwo best;
-    for (int j : candidates) {
-      if (frame.map_points[j]) continue;
-      best.offer(hammingDistance(point->descriptor().ptr<uint8_t>(), frame.descriptors.ptr<uint8_t>(j)), j,
-                 frame.keypoints[j].octave);
-    }
-    if (best.best_index < 0 || best.best_distance > max_descriptor_distance) continue;
-    frame.map_points[best.best_index] = point;
+    const NearestTwo best = nearestUsable(point->descriptor().ptr<uint8_t>(), frame.descriptors, candidates,
+                                          [&](int j) { return !frame.map_points[j]; }, usable);
+    if (best.index < 0 || best.distance > max_descriptor_distance) continue;
+    frame.map_points[best.index] = point;
     ++matches;
-    rotation.add(keyframe.keypoints[i].angle, frame.keypoints[best.best_index].angle, best.best_index);
+    rotation.add(keyframe.keypoints[i].angle, frame.keypoints[best.index].angle, best.index);
   }
   for (int j : rotation.rejectedMatches()) {
     frame.map_points[j] = nullptr;
@@ -156,22 +147,22 @@ int searchByProjection(Frame& frame, const KeyFrame& keyframe, const std::vector
 int searchByDescriptor(const KeyFrame& keyframe, const Frame& frame, std::vector<MapPoint*>& matches, double ratio) {
   matches.assign(frame.size(), nullptr);
   std::vector<int> best_distance_at(frame.size(), std::numeric_limits<int>::max());
+  std::vector<int> every_feature(frame.size());
+  std::iota(every_feature.begin(), every_feature.end(), 0);
   RotationHistogram rotation;
   int count = 0;
   for (size_t i = 0; i < keyframe.size(); ++i) {
     MapPoint* point = keyframe.mapPoint(i);
     if (!point || point->isBad()) continue;
     const uint8_t* descriptor = keyframe.descriptors.ptr<uint8_t>(i);
-    BestTwo best;
-    for (size_t j = 0; j < frame.size(); ++j)
-      best.offer(hammingDistance(descriptor, frame.descriptors.ptr<uint8_t>(j)), static_cast<int>(j), 0);
-    if (best.best_index < 0 || best.best_distance > kHammingThresholdLow) continue;
-    if (best.best_distance >= ratio * best.second_distance) continue;
-    if (best.best_distance >= best_distance_at[best.best_index]) continue;
-    if (!matches[best.best_index]) ++count;
-    matches[best.best_index] = point;
-    best_distance_at[best.best_index] = best.best_distance;
-    rotation.add(keyframe.keypoints[i].angle, frame.keypoints[best.best_index].angle, best.best_index);
+    const NearestTwo best = nearestTwo(descriptor, frame.descriptors, every_feature);
+    if (best.index < 0 || best.distance > kHammingThresholdLow) continue;
+    if (best.second_index >= 0 && best.distance >= ratio * best.second_distance) continue;
+    if (best.distance >= best_distance_at[best.index]) continue;
+    if (!matches[best.index]) ++count;
+    matches[best.index] = point;
+    best_distance_at[best.index] = best.distance;
+    rotation.add(keyframe.keypoints[i].angle, frame.keypoints[best.index].angle, best.index);
   }
   for (int j : rotation.rejectedMatches())
     if (matches[j]) {
@@ -183,11 +174,11 @@ int searchByDescriptor(const KeyFrame& keyframe, const Frame& frame, std::vector
 
 namespace {
 
-// Walks two direct indices node by node (both ordered by node id) and, for
-// every pair of features under the same node, lets `match` compare them.
-// `candidate_of(i)` says whether feature i of the first image takes part.
-template <typename Offer, typename Accept>
-void forEachSharedNode(const FeatureVector& first, const FeatureVector& second, Offer offer, Accept accept) {
+// Walks two direct indices node by node (both ordered by node id) and calls
+// visit(i, second_indices) for every feature i of the first image with the
+// features of the second image under the same node.
+template <typename Visit>
+void forEachSharedNode(const FeatureVector& first, const FeatureVector& second, Visit visit) {
   auto a = first.begin();
   auto b = second.begin();
   while (a != first.end() && b != second.end()) {
@@ -196,11 +187,7 @@ void forEachSharedNode(const FeatureVector& first, const FeatureVector& second, 
     } else if (b->first < a->first) {
       b = second.lower_bound(a->first);
     } else {
-      for (int i : a->second) {
-        BestTwo best;
-        if (!offer(i, b->second, best)) continue;
-        accept(i, best);
-      }
+      for (int i : a->second) visit(i, b->second);
       ++a;
       ++b;
     }
@@ -212,28 +199,20 @@ void forEachSharedNode(const FeatureVector& first, const FeatureVector& second, 
 int searchByBoW(const KeyFrame& keyframe, const Frame& frame, const FeatureVector& frame_features,
                 std::vector<MapPoint*>& matches, double ratio) {
   matches.assign(frame.size(), nullptr);
-  std::vector<int> best_distance_at(frame.size(), std::numeric_limits<int>::max());
+  std::vector<int> usable;
   RotationHistogram rotation;
   int count = 0;
-  forEachSharedNode(
-      keyframe.bow_features, frame_features,
-      [&](int i, const std::vector<int>& frame_indices, BestTwo& best) {
-        MapPoint* point = keyframe.mapPoint(i);
-        if (!point || point->isBad()) return false;
-        const uint8_t* descriptor = keyframe.descriptors.ptr<uint8_t>(i);
-        for (int j : frame_indices)
-          if (!matches[j]) best.offer(hammingDistance(descriptor, frame.descriptors.ptr<uint8_t>(j)), j, 0);
-        return true;
-      },
-      [&](int i, const BestTwo& best) {
-        if (best.best_index < 0 || best.best_distance > kHammingThresholdLow) return;
-        if (best.best_distance >= ratio * best.second_distance) return;
-        if (matches[best.best_index]) return;
-        matches[best.best_index] = keyframe.mapPoint(i);
-        best_distance_at[best.best_index] = best.best_distance;
-        rotation.add(keyframe.keypoints[i].angle, frame.keypoints[best.best_index].angle, best.best_index);
-        ++count;
-      });
+  forEachSharedNode(keyframe.bow_features, frame_features, [&](int i, const std::vector<int>& frame_indices) {
+    MapPoint* point = keyframe.mapPoint(i);
+    if (!point || point->isBad()) return;
+    const NearestTwo best = nearestUsable(keyframe.descriptors.ptr<uint8_t>(i), frame.descriptors, frame_indices,
+                                          [&](int j) { return !matches[j]; }, usable);
+    if (best.index < 0 || best.distance > kHammingThresholdLow) return;
+    if (best.second_index >= 0 && best.distance >= ratio * best.second_distance) return;
+    matches[best.index] = point;
+    rotation.add(keyframe.keypoints[i].angle, frame.keypoints[best.index].angle, best.index);
+    ++count;
+  });
   for (int j : rotation.rejectedMatches())
     if (matches[j]) {
       matches[j] = nullptr;
@@ -245,29 +224,25 @@ int searchByBoW(const KeyFrame& keyframe, const Frame& frame, const FeatureVecto
 int searchByBoW(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>& matches, double ratio) {
   matches.assign(kf1.size(), nullptr);
   std::vector<bool> taken2(kf2.size(), false);
+  std::vector<int> usable;
   RotationHistogram rotation;
   int count = 0;
-  forEachSharedNode(
-      kf1.bow_features, kf2.bow_features,
-      [&](int i, const std::vector<int>& indices2, BestTwo& best) {
-        MapPoint* point1 = kf1.mapPoint(i);
-        if (!point1 || point1->isBad()) return false;
-        const uint8_t* descriptor = kf1.descriptors.ptr<uint8_t>(i);
-        for (int j : indices2) {
-          MapPoint* point2 = kf2.mapPoint(j);
-          if (taken2[j] || !point2 || point2->isBad()) continue;
-          best.offer(hammingDistance(descriptor, kf2.descriptors.ptr<uint8_t>(j)), j, 0);
-        }
-        return true;
-      },
-      [&](int i, const BestTwo& best) {
-        if (best.best_index < 0 || best.best_distance > kHammingThresholdLow) return;
-        if (best.best_distance >= ratio * best.second_distance) return;
-        matches[i] = kf2.mapPoint(best.best_index);
-        taken2[best.best_index] = true;
-        rotation.add(kf1.keypoints[i].angle, kf2.keypoints[best.best_index].angle, i);
-        ++count;
-      });
+  forEachSharedNode(kf1.bow_features, kf2.bow_features, [&](int i, const std::vector<int>& indices2) {
+    MapPoint* point1 = kf1.mapPoint(i);
+    if (!point1 || point1->isBad()) return;
+    const NearestTwo best = nearestUsable(kf1.descriptors.ptr<uint8_t>(i), kf2.descriptors, indices2,
+                                          [&](int j) {
+                                            MapPoint* point2 = kf2.mapPoint(j);
+                                            return !taken2[j] && point2 && !point2->isBad();
+                                          },
+                                          usable);
+    if (best.index < 0 || best.distance > kHammingThresholdLow) return;
+    if (best.second_index >= 0 && best.distance >= ratio * best.second_distance) return;
+    matches[i] = kf2.mapPoint(best.index);
+    taken2[best.index] = true;
+    rotation.add(kf1.keypoints[i].angle, kf2.keypoints[best.index].angle, i);
+    ++count;
+  });
   for (int i : rotation.rejectedMatches())
     if (matches[i]) {
       matches[i] = nullptr;

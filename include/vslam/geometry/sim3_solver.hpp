@@ -1,8 +1,9 @@
 #pragma once
 // Similarity between two keyframes from matched map points (loop closing):
 // closed-form Umeyama/Horn on minimal sets of 3 in a seeded RANSAC loop, with
-// inliers judged by reprojection in both images, then a re-fit on the inliers
-// and a reprojection-error refinement.
+// inliers judged by reprojection in both images, then a re-fit on the inliers.
+// The reprojection-error refinement that should follow (the 3D fit weighs the
+// map points' uncertain depths) is optimize::optimizeSim3.
 #include <cstdint>
 #include <vector>
 
@@ -23,10 +24,6 @@ struct Sim3SolverParams {
   double chi2_threshold = 9.21;  // chi-square 99 %, 2 dof, times sigma^2 (ORB-SLAM's loop threshold)
   int min_inliers = 20;
   bool fix_scale = false;  // true for stereo / RGB-D, whose scale is observed
-  // After the 3D re-fit, minimise the reprojection errors of the inliers in
-  // both images over the 7 (6 with fix_scale) parameters: the map points'
-  // depths are far less certain than their pixels.
-  bool refine_reprojection = true;
 };
 
 struct Sim3Result {

@@ -324,3 +324,34 @@ TEST(CliEval, HelpListsEveryOptionAndItsDefault) {
 
 }  // namespace
 }  // namespace vslam
+
+namespace vslam {
+namespace {
+
+// 30 frames at the default speed (1.2 turns in 500 frames, 0.86 degrees a frame).
+TEST(CliSynth, WritesARoomSequenceThatRunTakesAndRefusesBadInput) {
+  const fs::path out = test::scratchDir("cli_synth") / "room";
+  const Outcome synth = vslam("synth --frames 30 --turns 0.072 --out " + quoted(out.string()));
+  ASSERT_EQ(synth.exit_code, 0) << synth.err;
+  EXPECT_TRUE(contains(synth.out, "--config " + out.string() + "/camera.yaml")) << synth.out;
+  EXPECT_EQ(readTumTrajectory((out / "groundtruth.txt").string()).size(), 30u);
+
+  const fs::path run_dir = test::scratchDir("cli_synth_run");
+  const Outcome run = vslam("run --seq " + quoted(out.string()) + " --config " + quoted((out / "camera.yaml").string()) +
+                            " --detector none --deterministic --no-render --out " + quoted(run_dir.string()));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json report = nlohmann::json::parse(slurp(run_dir / "report.json"));
+  EXPECT_EQ(report["frames_total"], 30);
+  EXPECT_GE(report["frames_tracked"].get<int>(), 25);
+
+  for (const std::string& bad : {"--frames 1", "--turns 0", "--radius 5"}) {
+    const Outcome refused = vslam("synth " + bad + " --out " + quoted((out.parent_path() / "bad").string()));
+    EXPECT_EQ(refused.exit_code, 2) << bad;
+    ASSERT_EQ(errorLines(refused.err).size(), 1u) << refused.err;
+    EXPECT_TRUE(contains(refused.err, bad.substr(0, bad.find(' ')))) << refused.err;
+    EXPECT_FALSE(fs::exists(out.parent_path() / "bad")) << bad;
+  }
+}
+
+}  // namespace
+}  // namespace vslam

@@ -2,6 +2,8 @@
 // mode): relocalisation after a gap, loop closing on a forward-then-backward
 // play, the final full bundle adjustment, the default vocabulary.
 #include <algorithm>
+#include <cmath>
+#include <map>
 #include <filesystem>
 
 #include <gtest/gtest.h>
@@ -12,6 +14,7 @@
 #include "vslam/slam/loop_closing.hpp"
 #include "vslam/slam/system.hpp"
 #include "vslam/place/vocabulary.hpp"
+#include "vslam/render/room_loop.hpp"
 
 namespace vslam {
 namespace {
@@ -105,12 +108,12 @@ ForwardBackward runForwardBackward(const Sequence& sequence, size_t n, bool loop
   return {system.keyframeTrajectory(), system.frameTrajectory(), system.loops()};
 }
 
-// The issue asks for at least one verified loop here. On fr1_xyz it does not
-// happen: the backward pass re-tracks the forward pass's map points, so every
-// earlier keyframe is a covisible neighbour of the current one, and loop
-// detection excludes neighbours by design (ORB-SLAM does the same). What is
-// checked: any loop accepted is well supported, and loop closing never makes
-// the trajectory worse. See docs/LOOP_CLOSING.md.
+// No loop is closed here, rightly: the backward pass re-tracks the forward
+// pass's map points (there is no drift to undo), so every earlier keyframe is
+// a covisible neighbour of the current one, and loop detection excludes
+// neighbours by design, as ORB-SLAM does. What is checked: any loop accepted
+// is well supported, and loop closing never makes the trajectory worse. The
+// verified loop is CirclingARoomClosesAVerifiedLoop. See docs/LOOP_CLOSING.md.
 TEST(SlamLoop, ForwardThenBackwardWithLoopClosingIsNoWorse) {
   const Sequence sequence = fr1Xyz();
   constexpr size_t kFrames = 150;
@@ -130,6 +133,62 @@ TEST(SlamLoop, ForwardThenBackwardWithLoopClosingIsNoWorse) {
   const AteResult ate_with = ate(with_loop.keyframes, groundtruth);
   const AteResult ate_without = ate(without_loop.keyframes, groundtruth);
   EXPECT_LE(ate_with.rmse_m, ate_without.rmse_m) << "with " << ate_with.rmse_m << ", without " << ate_without.rmse_m;
+}
+
+// A place truly left and revisited: the camera circles a textured room
+// (render/room_loop.hpp) 1.2 times, looking outwards, so the start's map
+// points leave the local map and monocular scale drift builds up until the
+// start comes back into view. Loop closing must find that place again (the
+// matched keyframe near the current one in the ground truth) and the
+// corrected trajectory must be no worse than the one without loop closing.
+// Both systems see the same frames, rendered once.
+TEST(SlamLoop, CirclingARoomClosesAVerifiedLoop) {
+  RoomLoopParams room;  // 500 frames, 1.2 turns, seed 1
+  const std::vector<StampedPose> path = roomLoopPath(room);
+  RoomLoopRenderer renderer(room);
+
+  SystemOptions options;
+  options.deterministic = true;
+  Config config;
+  config.camera = room.camera;
+  config.detector.model = "none";
+  config.loop.final_ba = false;  // compare loop closing alone
+  System with_loop(config, options);
+  config.loop.enabled = false;
+  System without_loop(config, options);
+  for (size_t k = 0; k < path.size(); ++k) {
+    const cv::Mat image = renderer.render(path[k].T_wc);
+    with_loop.processFrame(static_cast<int>(k), path[k].timestamp, image);
+    without_loop.processFrame(static_cast<int>(k), path[k].timestamp, image);
+  }
+  with_loop.finish();
+  without_loop.finish();
+
+  EXPECT_GE(with_loop.stats().frames_tracked, 0.97 * room.frames);
+  EXPECT_TRUE(without_loop.loops().empty());
+  const std::vector<LoopRecord> loops = with_loop.loops();
+  ASSERT_GE(loops.size(), 1u);
+  std::map<long, int> frame_of;
+  for (const ExportedKeyFrame& keyframe : with_loop.keyFrames()) frame_of[keyframe.id] = keyframe.frame_index;
+  for (const LoopRecord& loop : loops) {
+    EXPECT_GE(loop.inliers, 40);
+    EXPECT_GT(loop.scale, 0.8);  // the drift the loop undoes: a few per cent
+    EXPECT_LT(loop.scale, 1.25);
+    // Same place: the current keyframe is on the second turn, the matched one
+    // on the first, and in the ground truth they are close and look the same way.
+    ASSERT_TRUE(frame_of.count(loop.current_keyframe) && frame_of.count(loop.matched_keyframe));
+    const SE3& current = path[frame_of[loop.current_keyframe]].T_wc;
+    const SE3& matched = path[frame_of[loop.matched_keyframe]].T_wc;
+    EXPECT_GT(frame_of[loop.current_keyframe], room.frames / room.turns);
+    EXPECT_LT((current.t - matched.t).norm(), 0.3);
+    EXPECT_GT(current.R.col(2).dot(matched.R.col(2)), std::cos(30.0 * M_PI / 180.0));
+  }
+
+  const AteResult ate_with = ate(with_loop.keyframeTrajectory(), path);
+  const AteResult ate_without = ate(without_loop.keyframeTrajectory(), path);
+  EXPECT_LE(ate_with.rmse_m, ate_without.rmse_m) << "with " << ate_with.rmse_m << ", without " << ate_without.rmse_m;
+  // The room is 6 m wide; measured 0.92 cm with loop closing, 2.5 cm without.
+  EXPECT_LT(ate_with.rmse_m, 0.015);
 }
 
 TEST(SlamLoop, FinalBundleAdjustmentDoesNotWorsenTheTrajectory) {

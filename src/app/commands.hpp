@@ -18,5 +18,6 @@ Command addEvalCommand(CLI::App& app);
 Command addRenderCommand(CLI::App& app);
 Command addDetectCommand(CLI::App& app);
 Command addVocabCommand(CLI::App& app);
+Command addSynthCommand(CLI::App& app);
 
 }  // namespace vslam::app

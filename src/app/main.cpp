@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
       vslam::app::addRenderCommand(app),
       vslam::app::addDetectCommand(app),
       vslam::app::addVocabCommand(app),
+      vslam::app::addSynthCommand(app),
   };
 
   try {

@@ -1,0 +1,68 @@
+#pragma once
+// A synthetic sequence with a true loop: a camera circles inside a closed box
+// room, drawn off-screen through OSMesa, and comes back to where it started.
+// Every wall, floor and ceiling panel carries its own procedurally drawn
+// texture (seeded), so no two places look alike and the revisit is the only
+// loop there is. The camera looks outwards, away from the room's centre, so
+// the start leaves the view for most of the turn: tracking cannot hold on to
+// the first map points, monocular drift accumulates, and the loop has to be
+// found by place recognition. Everything here is deterministic.
+//
+// World frame: x and z horizontal, y down (like an upright camera's y), the
+// room centred on the origin. Poses are camera-to-world, as on disk.
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "vslam/core/camera.hpp"
+#include "vslam/core/types.hpp"
+
+namespace vslam {
+
+struct RoomLoopParams {
+  PinholeCamera camera = defaultCamera();
+  double room_half_width_m = 3.0;  // walls at x = +-this and z = +-this
+  double ceiling_y_m = -1.4;       // y is down: the ceiling is above the camera
+  double floor_y_m = 1.2;
+  int panels_per_wall = 3;         // each wall is split into this many textured panels
+  int texture_px = 512;
+  double path_radius_m = 0.8;      // the camera's circle around the room's centre
+  double bob_m = 0.05;             // the camera also rises and falls by this much, twice per turn
+  double turns = 1.2;              // more than one, so the start is seen again
+  int frames = 500;
+  double start_time_s = 0.0;
+  unsigned seed = 1;
+
+  static PinholeCamera defaultCamera();
+};
+
+// Ground truth: one camera-to-world pose per frame, timestamps at camera.fps.
+std::vector<StampedPose> roomLoopPath(const RoomLoopParams& params);
+
+class RoomLoopRenderer {
+ public:
+  // Builds the scene's textures and an off-screen context. Throws
+  // std::runtime_error when OSMesa is unavailable.
+  explicit RoomLoopRenderer(const RoomLoopParams& params);
+  ~RoomLoopRenderer();
+  RoomLoopRenderer(const RoomLoopRenderer&) = delete;
+  RoomLoopRenderer& operator=(const RoomLoopRenderer&) = delete;
+
+  // The view from camera-to-world pose T_wc: CV_8UC3 BGR, camera.width x camera.height.
+  cv::Mat render(const SE3& T_wc);
+
+ private:
+  struct Scene;
+  std::unique_ptr<Scene> scene_;
+};
+
+// Writes a TUM-layout folder: rgb/<timestamp>.png, rgb.txt, groundtruth.txt
+// and camera.yaml (for `vslam run --seq FOLDER --config FOLDER/camera.yaml`).
+// `progress` is called after each frame with (frames written, total).
+void writeRoomLoopSequence(const RoomLoopParams& params, const std::string& folder,
+                           const std::function<void(int, int)>& progress = {});
+
+}  // namespace vslam

@@ -88,6 +88,45 @@ TEST(ObjectMap, LinkDistanceDecidesWhatMerges) {
   EXPECT_TRUE(buildObjectMap(points, 0.0, params, kNames).empty());
 }
 
+// Two sparse parts of one chair, too far apart to link by distance (1 m at a
+// 0.5 m link distance) but within the 2.5 m box link distance: one detection
+// box of one keyframe seeing a point of each joins them; two different boxes,
+// another class, or a point in the box but farther than 2.5 m, do not.
+TEST(ObjectMap, ASharedDetectionBoxJoinsDistantParts) {
+  std::vector<LabelledPoint> points;
+  addCluster(points, 1, 0, 10, Vec3(0, 0, 0), Vec3(0.01, 0.01, 0.01), 1, {4});
+  addCluster(points, 1, 100, 10, Vec3(1, 0, 0), Vec3(1.01, 0.01, 0.01), 2, {4});
+  addCluster(points, 1, 300, 10, Vec3(4, 0, 0), Vec3(4.01, 0.01, 0.01), 4, {4});
+  points.back().detections = {{4, 0}};  // far behind, in the same box
+  ObjectMapParams params;
+  ASSERT_EQ(params.box_link_factor, 5.0);
+  ASSERT_EQ(buildObjectMap(points, 0.5, params, kNames).size(), 3u);
+
+  points[3].detections = {{4, 0}};   // keyframe 4, detection 0
+  points[15].detections = {{4, 1}};  // another box of keyframe 4
+  EXPECT_EQ(buildObjectMap(points, 0.5, params, kNames).size(), 3u);
+  points[15].detections.push_back({5, 0});  // detection 0 of another keyframe
+  EXPECT_EQ(buildObjectMap(points, 0.5, params, kNames).size(), 3u);
+
+  points[15].detections.push_back({4, 0});
+  const std::vector<ObjectLandmark> joined = buildObjectMap(points, 0.5, params, kNames);
+  ASSERT_EQ(joined.size(), 2u);
+  EXPECT_EQ(joined[0].point_ids.size(), 20u);
+  EXPECT_EQ(joined[1].point_ids.size(), 10u);
+  params.box_link_factor = 1.0;  // box joins no looser than distance joins: apart again
+  EXPECT_EQ(buildObjectMap(points, 0.5, params, kNames).size(), 3u);
+  params.box_link_factor = 5.0;
+
+  // Only points of one class join: a person point in the same box stays apart.
+  addCluster(points, 0, 200, 10, Vec3(2, 0, 0), Vec3(2.01, 0.01, 0.01), 3, {4});
+  points.back().detections = {{4, 0}};
+  const std::vector<ObjectLandmark> by_class = buildObjectMap(points, 0.5, params, kNames);
+  ASSERT_EQ(by_class.size(), 3u);
+  EXPECT_EQ(by_class[0].class_name, "person");
+  EXPECT_EQ(by_class[0].point_ids.size(), 10u);
+  EXPECT_EQ(by_class[1].point_ids.size(), 20u);
+}
+
 TEST(ObjectMap, Percentile) {
   EXPECT_DOUBLE_EQ(percentile({3, 1, 2}, 0.5), 2.0);
   EXPECT_DOUBLE_EQ(percentile({0, 10}, 0.25), 2.5);

@@ -5,6 +5,7 @@
 #include <map>
 #include <numeric>
 #include <tuple>
+#include <utility>
 
 namespace vslam {
 namespace {
@@ -30,10 +31,11 @@ class DisjointSets {
 
 using Cell = std::tuple<long, long, long>;
 
-// Single-linkage groups of `members` (indices into points): a grid of cells one
-// link distance wide means only the 27 surrounding cells can hold neighbours.
+// Single-linkage groups of `members` (indices into points): close points, and
+// less close ones sharing a detection box, are joined. A grid of cells one link
+// distance wide means only the 27 surrounding cells can hold neighbours.
 std::vector<std::vector<size_t>> linkGroups(const std::vector<LabelledPoint>& points, const std::vector<size_t>& members,
-                                            double link_distance) {
+                                            double link_distance, double box_link_distance) {
   auto cellOf = [&](const Vec3& p) {
     return Cell{static_cast<long>(std::floor(p.x() / link_distance)), static_cast<long>(std::floor(p.y() / link_distance)),
                 static_cast<long>(std::floor(p.z() / link_distance))};
@@ -55,6 +57,15 @@ std::vector<std::vector<size_t>> linkGroups(const std::vector<LabelledPoint>& po
             if (other > m && (points[members[other]].position - p).squaredNorm() <= limit2) sets.join(m, other);
         }
   }
+  std::map<std::pair<long, int>, std::vector<size_t>> in_box;  // (keyframe, detection) -> members seen in it
+  for (size_t m = 0; m < members.size(); ++m)
+    for (const auto& box : points[members[m]].detections) in_box[box].push_back(m);
+  const double box_limit2 = box_link_distance * box_link_distance;
+  for (const auto& [box, seen] : in_box)
+    for (size_t i = 0; i < seen.size(); ++i)
+      for (size_t j = i + 1; j < seen.size(); ++j)
+        if ((points[members[seen[i]]].position - points[members[seen[j]]].position).squaredNorm() <= box_limit2)
+          sets.join(seen[i], seen[j]);
   std::map<size_t, std::vector<size_t>> by_root;  // root -> point indices, in member order
   for (size_t m = 0; m < members.size(); ++m) by_root[sets.find(m)].push_back(members[m]);
   std::vector<std::vector<size_t>> groups;
@@ -113,7 +124,7 @@ std::vector<ObjectLandmark> buildObjectMap(const std::vector<LabelledPoint>& poi
     if (points[i].class_id >= 0 && points[i].position.allFinite()) by_class[points[i].class_id].push_back(i);
   for (auto& [class_id, members] : by_class) {
     std::sort(members.begin(), members.end(), [&](size_t a, size_t b) { return points[a].id < points[b].id; });
-    for (const std::vector<size_t>& group : linkGroups(points, members, link_distance))
+    for (const std::vector<size_t>& group : linkGroups(points, members, link_distance, params.box_link_factor * link_distance))
       if (static_cast<int>(group.size()) >= params.min_points)
         objects.push_back(describe(points, group, class_id, params, class_names));
   }

@@ -202,11 +202,15 @@ std::vector<ObjectLandmark> System::objectMap(const ObjectMapParams& params) con
   {
     std::lock_guard<std::mutex> lock(map_->mutex());
     for (MapPoint* point : map_->mapPoints()) {
-      LabelledPoint entry{point->id(), point->position(), point->classId(), point->classConfidence(), {}};
+      LabelledPoint entry{point->id(), point->position(), point->classId(), point->classConfidence(), {}, {}};
       for (const auto& [keyframe, keypoint] : point->observations()) {
         if (keyframe->isBad()) continue;
         depths.push_back((point->position() - keyframe->cameraCentre()).norm());
         entry.keyframe_ids.push_back(keyframe->id());
+        if (entry.class_id < 0 || static_cast<size_t>(keypoint) >= keyframe->labels.size()) continue;
+        const FeatureLabel& label = keyframe->labels[keypoint];
+        if (label.class_id == entry.class_id && label.detection_id >= 0)
+          entry.detections.emplace_back(keyframe->id(), label.detection_id);
       }
       if (entry.class_id >= 0) labelled.push_back(std::move(entry));
     }

@@ -3,9 +3,14 @@
 // 3D, grouped into one object each (the semantic map of issue 5).
 //
 // Grouping is single-linkage: two points of the same class belong to the same
-// object when a chain of same-class points joins them with every step shorter
-// than `link_distance`. Monocular maps have an arbitrary scale, so callers give
-// that distance relative to the scene (see linkDistanceFor).
+// object when a chain of same-class points joins them, every step either
+// shorter than `link_distance`, or shorter than `box_link_factor` times that
+// between two points seen in one detection box (the same box of the same
+// keyframe: the detector said they are one object, however sparse the points
+// between them; the bound keeps out a badly triangulated point far behind).
+// Monocular maps have an arbitrary scale, so callers give the distance
+// relative to the scene (see linkDistanceFor).
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -19,6 +24,8 @@ struct LabelledPoint {
   int class_id = -1;
   double confidence = 0.0;         // share of its observations that carry class_id
   std::vector<long> keyframe_ids;  // keyframes observing it
+  // (keyframe id, detection id) of the observations inside a box of class_id.
+  std::vector<std::pair<long, int>> detections;
 };
 
 struct ObjectLandmark {
@@ -33,6 +40,7 @@ struct ObjectLandmark {
 
 struct ObjectMapParams {
   double link_distance_ratio = 0.08;  // link distance = this x the median keyframe-to-point depth
+  double box_link_factor = 5.0;       // points sharing a detection box link up to this x the link distance
   int min_points = 5;                 // smaller groups are dropped as noise (stray labels)
   double box_percentile = 0.05;       // box spans [p, 1 - p] of the points per axis
 };

@@ -94,9 +94,8 @@ std::vector<StampedPose> roomLoopPath(const RoomLoopParams& params) {
   const double total_angle = 2.0 * M_PI * params.turns;
   for (int k = 0; k < params.frames; ++k) {
     const double angle = params.frames > 1 ? total_angle * k / (params.frames - 1) : 0.0;
-    const double phase = angle;  // two rises per turn below
     const Vec3 outward(std::cos(angle), 0.0, std::sin(angle));
-    const Vec3 centre = params.path_radius_m * outward + Vec3(0.0, params.bob_m * std::sin(2.0 * phase), 0.0);
+    const Vec3 centre = params.path_radius_m * outward + Vec3(0.0, params.bob_m * std::sin(2.0 * angle), 0.0);
     // Camera axes in the world: z looks outwards, y is down, x = y cross z.
     Mat3 R_wc;
     R_wc.col(2) = outward;

@@ -1,6 +1,5 @@
 #include "vslam/render/room_loop.hpp"
 
-#include <GL/osmesa.h>
 #include <GL/gl.h>
 
 #include <array>
@@ -225,6 +224,8 @@ void writeRoomLoopSequence(const RoomLoopParams& params, const std::string& fold
     list << stamp << " " << name << "\n";
     if (progress) progress(static_cast<int>(k + 1), static_cast<int>(path.size()));
   }
+  list.close();
+  if (!list) throw std::runtime_error("cannot write " + (root / "rgb.txt").string());
   writeTumTrajectory((root / "groundtruth.txt").string(), path);
 
   const PinholeCamera& c = params.camera;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "vslam/map/map.hpp"
+#include "vslam/slam/local_mapping.hpp"
 
 namespace vslam {
 namespace {
@@ -200,6 +201,93 @@ TEST_F(MapGraphTest, ClearedMapRestartsAtKeyFrameZeroWithoutParentCycle) {
   b->updateConnections();
   EXPECT_EQ(a->parent(), nullptr);
   EXPECT_EQ(b->parent(), a);
+}
+
+// Regression: culling iterated the keyframe's own covisibility list while
+// setBad() rebuilt it, so after each cull the next neighbour was skipped (and
+// the loop read past the list's end). Ten keyframes see the same 100 points;
+// culling goes on while a point keeps more than three observers, so exactly
+// seven of the eight erasable neighbours must go, not every other one.
+TEST_F(MapGraphTest, CullingSeveralRedundantNeighboursExaminesEveryOne) {
+  std::vector<KeyFrame*> keyframes;
+  for (int k = 0; k < 10; ++k) keyframes.push_back(map_.createKeyFrame(makeFrame(k, 100, 0.1 * k)));
+  for (int i = 0; i < 100; ++i) observe(keyframes, i);
+  for (KeyFrame* kf : keyframes) kf->updateConnections();
+  KeyFrame* current = keyframes.back();
+  ASSERT_EQ(current->orderedCovisibles().size(), 9u);  // keyframe 0 among them, never culled
+
+  const std::vector<KeyFrame*> culled = cullRedundantKeyFrames(current, 0.9);
+  // Each cull removes one observation per point: 10 -> 3 observers after
+  // seven, and a point seen three times makes no keyframe redundant.
+  ASSERT_EQ(culled.size(), 7u);
+  for (size_t k = 0; k < culled.size(); ++k) EXPECT_EQ(culled[k]->id(), static_cast<long>(k + 1));
+  EXPECT_EQ(map_.keyframeCount(), 3u);
+  EXPECT_EQ(current->orderedCovisibles().size(), 2u);
+  // Every live keyframe still reaches the root through its parents.
+  for (KeyFrame* kf : map_.keyframes()) {
+    const KeyFrame* k = kf;
+    int steps = 0;
+    while (k->parent() && steps++ < 20) k = k->parent();
+    EXPECT_EQ(k->id(), 0) << "keyframe " << kf->id();
+  }
+}
+
+// Regression: a keyframe got a parent only at its first link with shared
+// points; one linked before it shared any stayed outside the spanning tree.
+TEST_F(MapGraphTest, KeyFrameWithoutSharedPointsTakesItsFallbackParent) {
+  KeyFrame* a = map_.createKeyFrame(makeFrame(0, 100));
+  KeyFrame* b = map_.createKeyFrame(makeFrame(1, 100));
+  for (int i = 0; i < 30; ++i) observe({a, b}, i);
+  a->updateConnections();
+  b->updateConnections();
+  KeyFrame* c = map_.createKeyFrame(makeFrame(2, 100));
+  c->setFallbackParent(b);
+  c->updateConnections();  // no shared point yet
+  EXPECT_EQ(c->parent(), b);
+  EXPECT_EQ(b->children().count(c), 1u);
+  // A real link replaces the fallback.
+  for (int i = 30; i < 60; ++i) observe({a, c}, i);
+  c->updateConnections();
+  EXPECT_EQ(c->parent(), a);
+  EXPECT_EQ(b->children().count(c), 0u);
+}
+
+// Regression: culling a keyframe without a parent handed its children to a
+// null parent, cutting them off the tree. Such a keyframe is kept.
+TEST_F(MapGraphTest, KeyFrameWithoutParentIsNotCulled) {
+  KeyFrame* root = map_.createKeyFrame(makeFrame(0, 100));
+  KeyFrame* orphan = map_.createKeyFrame(makeFrame(1, 100));  // never linked: no parent
+  KeyFrame* child = map_.createKeyFrame(makeFrame(2, 100));
+  for (int i = 0; i < 30; ++i) observe({orphan, child}, i);
+  child->updateConnections();
+  ASSERT_EQ(child->parent(), orphan);
+  ASSERT_EQ(orphan->parent(), nullptr);
+  orphan->setBad();
+  EXPECT_FALSE(orphan->isBad());
+  EXPECT_EQ(child->parent(), orphan);
+  EXPECT_FALSE(root->isBad());
+}
+
+// The paper's rule: a map point lives only while seen in at least 3 keyframes.
+// On probation (just triangulated) two views suffice; once confirmed, losing
+// the third observer kills it. It used to survive with two.
+TEST_F(MapGraphTest, ConfirmedPointDiesBelowThreeObservations) {
+  KeyFrame* a = map_.createKeyFrame(makeFrame(0, 10));
+  KeyFrame* b = map_.createKeyFrame(makeFrame(1, 10));
+  KeyFrame* c = map_.createKeyFrame(makeFrame(2, 10));
+  KeyFrame* d = map_.createKeyFrame(makeFrame(3, 10));
+  MapPoint* on_probation = observe({a, b, c}, 0);
+  MapPoint* confirmed = observe({a, b, c}, 1);
+  confirmed->confirm(3);
+  on_probation->eraseObservation(c);
+  confirmed->eraseObservation(c);
+  EXPECT_FALSE(on_probation->isBad());
+  EXPECT_TRUE(confirmed->isBad());
+  EXPECT_EQ(a->mapPoint(1), nullptr);
+  MapPoint* four = observe({a, b, c, d}, 2);
+  four->confirm(3);
+  four->eraseObservation(d);
+  EXPECT_FALSE(four->isBad());
 }
 
 }  // namespace

@@ -144,6 +144,10 @@ Command addRunCommand(CLI::App& app) {
   cli->add_flag("--no-final-ba", options->no_final_ba, "Skip the full bundle adjustment after the last frame");
   cli->add_flag("--deterministic", options->pipeline.deterministic,
                 "Run the threads in lock-step so that repeated runs give identical results (default: off)");
+  cli->add_flag("--realtime", options->pipeline.realtime,
+                "Play the sequence at its timestamps like a live camera: frames that arrive while Tracking is busy "
+                "are dropped (report.json frames_dropped) and keyframes are skipped while Local Mapping is busy "
+                "(default: off, every frame is processed and no keyframe is dropped)");
   cli->add_flag("--no-fetch", options->no_fetch,
                 "Do not download a TUM sequence that is not found (default: fetch with tools/fetch_dataset.sh)");
   cli->add_option("--max-frames", options->max_frames, "Process only the first N frames; 0 = all")

@@ -203,32 +203,54 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   size_t end = sequence.frames.size();
   if (options.max_frames > 0) end = std::min(end, begin + options.max_frames);
 
+  if (options.deterministic && options.realtime)
+    throw InputError("--realtime and --deterministic exclude each other: a live camera does not wait");
   SystemOptions system_options;
   system_options.deterministic = options.deterministic;
+  system_options.realtime = options.realtime;
   System system(sequence.config, system_options);
 
   spdlog::info("running {} ({} frames, {}, {}) into {}", sequence.name, end - begin, options.mode,
-               options.deterministic ? "deterministic" : "threaded", out_dir);
+               options.deterministic ? "deterministic" : options.realtime ? "threaded, real time" : "threaded",
+               out_dir);
   const auto start = std::chrono::steady_clock::now();
   std::vector<double> tracked_points;  // map points tracked in each tracked frame
+  int frames_dropped = 0;              // --realtime: arrived while Tracking was busy
   {
     FramePrefetcher prefetcher(sequence, begin, end, !mono);
     LoadedFrame loaded, ahead;
     size_t processed = 0;
     bool have_loaded = prefetcher.next(loaded);
+    const double first_timestamp = begin < end ? sequence.frames[begin].timestamp : 0.0;
+    // When a frame reaches a live camera's driver: its timestamp on the run's clock.
+    auto arrival = [&](size_t position) {
+      return start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                         std::chrono::duration<double>(sequence.frames[position].timestamp - first_timestamp));
+    };
+    bool have_ahead = have_loaded && prefetcher.next(ahead);
     while (have_loaded) {
+      if (options.realtime) {
+        std::this_thread::sleep_until(arrival(loaded.position));
+        // Only the newest frame that has arrived is tracked; the ones before it are dropped.
+        while (have_ahead && arrival(ahead.position) <= std::chrono::steady_clock::now()) {
+          ++frames_dropped;
+          loaded = std::move(ahead);
+          have_ahead = prefetcher.next(ahead);
+        }
+      }
       if (!loaded.error.empty()) throw InputError(loaded.error);
-      // Detection of the next frame runs on its own thread while this one is tracked.
-      const bool have_ahead = prefetcher.next(ahead);
-      if (have_ahead && ahead.error.empty())
+      // Detection of the next frame runs on its own thread while this one is tracked
+      // (not in real time: which frame comes next is not known yet).
+      if (!options.realtime && have_ahead && ahead.error.empty())
         system.submitAhead(sequence.frames[ahead.position].index, ahead.image);
       const FrameEntry& entry = sequence.frames[loaded.position];
       if (system.processFrame(entry.index, entry.timestamp, loaded.image, loaded.depth))
         tracked_points.push_back(system.lastTrackedPoints());
       loaded = std::move(ahead);
       have_loaded = have_ahead;
+      have_ahead = have_loaded && prefetcher.next(ahead);
       ++processed;
-      if (processed % 50 == 0 || processed == end - begin) {
+      if (processed % 50 == 0 || !have_loaded) {
         const SystemStats stats = system.stats();
         const double elapsed =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -258,6 +280,8 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   report["sequence_root"] = sequence.root;
   report["mode"] = options.mode;
   report["deterministic"] = options.deterministic;
+  report["realtime"] = options.realtime;
+  report["frames_dropped"] = frames_dropped;
   report["camera"] = sequence.config.camera.name;
   report["frames_total"] = stats.frames;
   report["frames_tracked"] = static_cast<int>(trajectory.size());
@@ -267,6 +291,9 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   report["map_points"] = stats.map_points;
   report["local_bundle_adjustments"] = stats.local_bundle_adjustments;
   report["culled_keyframes"] = stats.culled_keyframes;
+  report["keyframe_waits"] = stats.keyframe_waits;
+  report["map_resets"] = stats.map_resets;
+  report["implausible_loops_rejected"] = stats.implausible_loops_rejected;
   report["groundtruth_file"] = sequence.groundtruth_path;
   if (sequence.hasGroundTruth() && end > begin) {
     writeRunGroundTruth(out_dir + "/groundtruth.txt", sequence, sequence.frames[begin].timestamp,

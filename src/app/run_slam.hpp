@@ -11,6 +11,12 @@ struct RunOptions {
   std::string mode = "mono";  // mono | rgbd
   std::string out_dir;        // "" = runs/<sequence>-<time>
   bool deterministic = false;
+  // Play the sequence at its timestamps, as a live camera: a frame that arrives
+  // while Tracking is still busy with an earlier one is dropped (counted in
+  // report.json's frames_dropped), and keyframes are skipped while Local Mapping
+  // is busy. Off (the default): every frame is processed, and Tracking waits for
+  // Local Mapping rather than drop a keyframe.
+  bool realtime = false;
   int max_frames = 0;         // 0 = all
   int start_frame = 0;
   bool no_render = false;     // true: no PNGs at the end (renderRunFolder)

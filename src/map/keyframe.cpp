@@ -77,7 +77,18 @@ void KeyFrame::updateConnections() {
     for (const auto& [keyframe, index] : point->observations())
       if (keyframe != this && !keyframe->isBad()) ++counts[keyframe];
   }
-  if (counts.empty()) return;
+  if (counts.empty()) {
+    // No shared point yet: keep the tree connected through the fallback parent.
+    if (!parent_ && id_ != 0 && !bad_) {
+      KeyFrame* fallback = fallback_parent_;
+      while (fallback && fallback->isBad()) fallback = fallback->parent();
+      if (fallback && fallback != this) {
+        changeParent(fallback);
+        parent_is_fallback_ = true;
+      }
+    }
+    return;
+  }
   // Edges need at least 15 shared points; keep the strongest one regardless so the graph stays connected.
   constexpr int kMinWeight = 15;
   KeyFrame* strongest = nullptr;
@@ -95,11 +106,18 @@ void KeyFrame::updateConnections() {
     }
   }
   updateOrder();
-  if (first_connection_ && id_ != 0) {
-    parent_ = strongest;
-    parent_->children_.insert(this);
-    first_connection_ = false;
+  // The parent is chosen once, at the first real link (a fallback parent gives way to it).
+  if ((!parent_ || parent_is_fallback_) && id_ != 0 && !bad_ && !isDescendant(strongest)) {
+    changeParent(strongest);
+    parent_is_fallback_ = false;
   }
+}
+
+bool KeyFrame::isDescendant(const KeyFrame* other) const {
+  // Walks up from `other`: a parent link to one of our descendants would make a cycle.
+  for (const KeyFrame* k = other; k; k = k->parent_)
+    if (k == this) return true;
+  return false;
 }
 
 std::vector<KeyFrame*> KeyFrame::bestCovisibles(size_t n) const {
@@ -130,8 +148,12 @@ void KeyFrame::changeParent(KeyFrame* parent) {
 }
 
 void KeyFrame::setBad() {
-  if (id_ == 0 || not_erase || bad_) return;
-  for (const auto& [keyframe, weight] : connection_weights_) keyframe->eraseConnection(this);
+  if (!erasable() || bad_) return;
+  // Without a parent the children would be cut off from the root.
+  if (!parent_ || parent_->isBad()) return;
+  // Copy first: erasing this keyframe's connections changes the neighbours' covisibility lists.
+  const std::vector<KeyFrame*> neighbours = ordered_covisibles_;
+  for (KeyFrame* keyframe : neighbours) keyframe->eraseConnection(this);
   for (size_t i = 0; i < map_points_.size(); ++i)
     if (map_points_[i]) {
       MapPoint* point = map_points_[i];
@@ -144,8 +166,7 @@ void KeyFrame::setBad() {
 
   // Reattach each child to the candidate parent it shares most points with:
   // the grandparent or an already reattached sibling.
-  KeyFrameSet parent_candidates;
-  if (parent_) parent_candidates.insert(parent_);
+  KeyFrameSet parent_candidates = {parent_};
   KeyFrameSet orphans = children_;
   while (!orphans.empty()) {
     KeyFrame* best_child = nullptr;
@@ -169,8 +190,8 @@ void KeyFrame::setBad() {
   }
   for (KeyFrame* child : orphans) child->changeParent(parent_);
   children_.clear();
-  if (parent_) T_c_parent_ = T_cw_ * parent_->pose().inverse();
-  if (parent_) parent_->children_.erase(this);
+  T_c_parent_ = T_cw_ * parent_->pose().inverse();
+  parent_->children_.erase(this);
   bad_ = true;
   // parent_ is kept: the trajectory of frames referring to this keyframe follows it.
 }

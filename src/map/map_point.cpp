@@ -17,8 +17,10 @@ void MapPoint::addObservation(KeyFrame* keyframe, int keypoint) { observations_[
 void MapPoint::eraseObservation(KeyFrame* keyframe) {
   if (observations_.erase(keyframe) == 0) return;
   if (reference_ == keyframe && !observations_.empty()) reference_ = observations_.begin()->first;
-  // A point seen from one keyframe only carries no depth information.
-  if (observations_.size() < 2) setBad();
+  // A point seen from one keyframe only carries no depth information; a
+  // confirmed one must keep the map's minimum of observers.
+  const int needed = std::max(2, confirmed_min_observations_);
+  if (static_cast<int>(observations_.size()) < needed) setBad();
 }
 
 int MapPoint::keypointIn(const KeyFrame* keyframe) const {

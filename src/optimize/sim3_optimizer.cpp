@@ -12,13 +12,18 @@
 namespace vslam {
 namespace {
 
-// Whitened pixel error of a camera-frame point; zero behind the camera (the
-// outlier test rejects such matches).
+// Whitened pixel error of a camera-frame point. Behind the camera it is
+// bounded and grows with the distance behind, as in reprojectionResidual (no
+// cost cliff); the outlier test rejects such matches.
 template <typename T>
 void pixelResidual(const ProjectionModel& model, const Vec2& pixel, double sqrt_information,
                    const Eigen::Matrix<T, 3, 1>& p_c, T* residual) {
   if (p_c.z() < T(kMinPositiveDepth)) {
-    residual[0] = residual[1] = T(0);
+    T norm = p_c.norm();
+    if (norm < T(kMinPositiveDepth)) norm = T(kMinPositiveDepth);
+    const T behind = (T(kMinPositiveDepth) - p_c.z()) / norm;
+    residual[0] = sqrt_information * model.fx * (T(2) + behind);
+    residual[1] = sqrt_information * model.fy * (T(2) + behind);
     return;
   }
   residual[0] = sqrt_information * (model.fx * p_c.x() / p_c.z() + model.cx - pixel.x());

@@ -59,10 +59,38 @@ void LocalMapping::insertKeyFrame(KeyFrame* keyframe) {
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     queue_.push_back(keyframe);
+    ++inserted_count_;
     accepting_.store(false);
   }
   abort_ba_.store(true);
   queue_cv_.notify_all();
+}
+
+void LocalMapping::waitUntilIdle() {
+  std::unique_lock<std::mutex> lock(queue_mutex_);
+  queue_cv_.wait(lock, [this] {
+    return (queue_.empty() && !processing_) || failure_ || !thread_.joinable() || finish_requested_;
+  });
+}
+
+void LocalMapping::waitUntilLinked() {
+  std::unique_lock<std::mutex> lock(queue_mutex_);
+  queue_cv_.wait(lock, [this] {
+    return linked_count_ >= inserted_count_ || failure_ || !thread_.joinable() || finish_requested_;
+  });
+}
+
+void LocalMapping::markLinked() {
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    ++linked_count_;
+  }
+  queue_cv_.notify_all();
+}
+
+std::exception_ptr LocalMapping::failure() const {
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  return failure_;
 }
 
 size_t LocalMapping::queuedKeyFrames() const {
@@ -74,6 +102,7 @@ void LocalMapping::reset() {
   std::unique_lock<std::mutex> lock(queue_mutex_);
   queue_.clear();
   queue_cv_.wait(lock, [this] { return !processing_; });
+  linked_count_ = inserted_count_;
   recent_points_.clear();
   if (database_) database_->clear();  // keyframe ids restart with the new map
   accepting_.store(true);
@@ -140,12 +169,23 @@ void LocalMapping::run() {
       accepting_.store(false);
     }
     abort_ba_.store(false);
-    processKeyFrame(keyframe);
+    std::exception_ptr failure;
+    try {
+      processKeyFrame(keyframe);
+    } catch (...) {
+      failure = std::current_exception();  // reaches the caller through failure()
+    }
     {
       std::lock_guard<std::mutex> lock(queue_mutex_);
       processing_ = false;
+      if (failure) {
+        failure_ = failure;
+        queue_.clear();
+      }
+      linked_count_ = inserted_count_ - static_cast<long>(queue_.size());  // this one is done, linked or not
     }
     queue_cv_.notify_all();
+    if (failure) return;
   }
 }
 
@@ -170,10 +210,19 @@ void LocalMapping::processKeyFrame(KeyFrame* keyframe) {
     triangulateNewPoints(keyframe);
     if (queueEmpty()) fuseDuplicates(keyframe);
   }
-  if (queueEmpty() && map_.keyframeCount() > 2) {
+  markLinked();  // Tracking may go on with this keyframe's points while the local BA runs
+  bool enough_keyframes;
+  {
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    enough_keyframes = map_.keyframeCount() > 2;
+  }
+  if (queueEmpty() && enough_keyframes) {
     localBundleAdjustment(keyframe);
     std::lock_guard<std::mutex> lock(map_.mutex());
-    cullRedundantKeyFrames(keyframe);
+    for (KeyFrame* culled : cullRedundantKeyFrames(keyframe, config_.mapping.redundant_keyframe_ratio)) {
+      if (database_) database_->erase(culled->id());
+      ++culled_keyframes_;
+    }
   }
   {
     std::lock_guard<std::mutex> lock(map_.mutex());
@@ -181,6 +230,7 @@ void LocalMapping::processKeyFrame(KeyFrame* keyframe) {
     if (database_ && keyframe->hasBow()) database_->add(keyframe->id(), keyframe->bow);
   }
   if (loop_closing_) loop_closing_->insertKeyFrame(keyframe);
+  if (after_keyframe_) after_keyframe_(keyframe->id());
 }
 
 void LocalMapping::linkKeyFrame(KeyFrame* keyframe) {
@@ -221,7 +271,8 @@ void LocalMapping::cullRecentMapPoints(KeyFrame* keyframe) {
       point->setBad();
       it = recent_points_.erase(it);
     } else if (age >= 3) {
-      it = recent_points_.erase(it);  // survived its probation
+      point->confirm(min_observations);  // survived its probation: the rule now holds for good
+      it = recent_points_.erase(it);
     } else {
       ++it;
     }
@@ -407,12 +458,13 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
   }
 }
 
-void LocalMapping::cullRedundantKeyFrames(KeyFrame* keyframe) {
-  // A keyframe is redundant when 90 % of its points are seen by at least three
-  // other keyframes at the same or a finer scale.
+std::vector<KeyFrame*> cullRedundantKeyFrames(KeyFrame* keyframe, double redundant_ratio) {
   constexpr int kObserversNeeded = 3;
-  for (KeyFrame* candidate : keyframe->orderedCovisibles()) {
-    if (candidate->id() == 0 || candidate->isBad()) continue;
+  std::vector<KeyFrame*> culled;
+  // A copy: culling a neighbour erases it from this keyframe's covisibility list.
+  const std::vector<KeyFrame*> candidates = keyframe->orderedCovisibles();
+  for (KeyFrame* candidate : candidates) {
+    if (candidate->isBad() || !candidate->erasable()) continue;
     int with_points = 0, redundant = 0;
     for (size_t i = 0; i < candidate->size(); ++i) {
       MapPoint* point = candidate->mapPoint(i);
@@ -427,13 +479,12 @@ void LocalMapping::cullRedundantKeyFrames(KeyFrame* keyframe) {
       }
       if (observers >= kObserversNeeded) ++redundant;
     }
-    if (with_points > 0 && redundant > config_.mapping.redundant_keyframe_ratio * with_points) {
+    if (with_points > 0 && redundant > redundant_ratio * with_points) {
       candidate->setBad();
-      if (!candidate->isBad()) continue;  // held by Loop Closing
-      if (database_) database_->erase(candidate->id());
-      ++culled_keyframes_;
+      if (candidate->isBad()) culled.push_back(candidate);
     }
   }
+  return culled;
 }
 
 }  // namespace vslam

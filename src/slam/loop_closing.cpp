@@ -71,6 +71,12 @@ int searchLoopByProjection(const KeyFrame& current, const Sim3& S_cw, const std:
 
 }  // namespace
 
+bool loopAccepted(double scale, int inliers, const LoopScaleRule& rule) {
+  if (!(scale > 0)) return false;
+  const bool plausible = scale >= rule.min_plausible_scale && scale <= rule.max_plausible_scale;
+  return inliers >= (plausible ? rule.min_inliers : rule.min_inliers_implausible);
+}
+
 // ---------------------------------------------------------------------------
 // Full bundle adjustment.
 
@@ -235,9 +241,49 @@ void LoopClosing::run() {
       if (queue_.empty()) return;
       id = queue_.front();
       queue_.pop_front();
+      processing_ = true;
     }
-    process(id);
+    std::exception_ptr failure;
+    try {
+      process(id);
+    } catch (...) {
+      failure = std::current_exception();  // reaches the caller through failure()
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      processing_ = false;
+      if (failure && !failure_) failure_ = failure;
+    }
+    cv_.notify_all();
+    if (failure) return;
   }
+}
+
+void LoopClosing::reset() {
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    queue_.clear();
+    cv_.wait(lock, [this] { return !processing_; });
+    consistent_groups_.clear();
+    last_loop_keyframe_id_ = -1;
+  }
+  abortFullBundleAdjustment();
+}
+
+LoopClosingState LoopClosing::state() const {
+  std::unique_lock<std::mutex> lock(mutex_);
+  cv_.wait(lock, [this] { return !processing_; });
+  LoopClosingState state;
+  state.queued = queue_.size();
+  state.consistent_groups = consistent_groups_.size();
+  state.last_loop_keyframe_id = last_loop_keyframe_id_;
+  state.full_ba_running = full_ba_thread_.joinable();
+  return state;
+}
+
+std::exception_ptr LoopClosing::failure() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return failure_;
 }
 
 std::vector<LoopRecord> LoopClosing::loops() const {
@@ -256,18 +302,30 @@ void LoopClosing::process(long keyframe_id) {
     if (!current || current->isBad() || !current->hasBow()) return;
     const std::vector<KeyFrame*> candidates = detectCandidates(current);
     if (!candidates.empty()) found = computeSim3(current, candidates, loop);
+    if (!found) return;
+    // The map lock is released before the correction: hold both keyframes so
+    // that Local Mapping cannot cull them in between.
+    current->holdFromErase();
+    loop.matched->holdFromErase();
   }
-  if (!found) return;
   // A full BA still running from an earlier loop would merge poses from before this correction.
   abortFullBundleAdjustment();
+  bool corrected = false;
   {
     ScopedStage stage(timer_, "loop_correction");
     local_mapping_.pause();
     {
       std::lock_guard<std::mutex> lock(map_.mutex());
-      correctLoop(current, loop);
+      corrected = correctLoop(current, loop);
+      current->releaseErase();
+      loop.matched->releaseErase();
     }
     local_mapping_.resume();
+  }
+  if (!corrected) {
+    spdlog::warn("loop between keyframes {} and {} abandoned: a keyframe of it was culled", current->id(),
+                 loop.matched->id());
+    return;
   }
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -287,10 +345,18 @@ void LoopClosing::startFullBundleAdjustment() {
     spdlog::debug("full BA after loop: {} keyframes, {} points, cost {:.1f} -> {:.1f}{}", result.keyframes,
                   result.points, result.initial_cost, result.final_cost, result.merged ? "" : " (aborted)");
   };
-  if (thread_.joinable())
-    full_ba_thread_ = std::thread(solve);
-  else
+  if (!thread_.joinable()) {
     solve();  // deterministic mode
+    return;
+  }
+  full_ba_thread_ = std::thread([this, solve] {
+    try {
+      solve();
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (!failure_) failure_ = std::current_exception();
+    }
+  });
 }
 
 void LoopClosing::abortFullBundleAdjustment() {
@@ -460,6 +526,12 @@ bool LoopClosing::computeSim3(KeyFrame* current, const std::vector<KeyFrame*>& c
     spdlog::debug("loop candidate {} for keyframe {}: {} BoW, {} RANSAC, {} refined, {} total", candidate->id(),
                   current->id(), pairs.size(), best_inliers, refined.n_inliers, total);
     if (total < kMinLoopInliers) continue;
+    if (!loopAccepted(S12.s, total)) {
+      ++implausible_rejected_;
+      spdlog::info("loop candidate {} for keyframe {} rejected: Sim(3) scale {:.3f} is implausible for {} matches",
+                   candidate->id(), current->id(), S12.s, total);
+      continue;
+    }
     loop.matched = candidate;
     loop.S_cw = S_cw;
     loop.matched_points = std::move(matched);
@@ -474,7 +546,8 @@ bool LoopClosing::computeSim3(KeyFrame* current, const std::vector<KeyFrame*>& c
 // ---------------------------------------------------------------------------
 // Correction.
 
-void LoopClosing::correctLoop(KeyFrame* current, LoopCandidate& loop) {
+bool LoopClosing::correctLoop(KeyFrame* current, LoopCandidate& loop) {
+  if (current->isBad() || !loop.matched || loop.matched->isBad()) return false;
   current->updateConnections();
   // The current keyframe and its neighbours move with the loop's similarity.
   std::vector<KeyFrame*> connected = {current};
@@ -538,20 +611,34 @@ void LoopClosing::correctLoop(KeyFrame* current, LoopCandidate& loop) {
     vertices.push_back({kf->id(), initial, kf == loop.matched});
     if (!uncorrected.count(kf)) uncorrected[kf] = initial;
   }
+  // Checked lookups only: operator[] would insert slot 0 (another keyframe's
+  // vertex) for a keyframe not in the graph.
+  auto slotOf = [&](KeyFrame* kf) {
+    auto it = slot.find(kf);
+    return it == slot.end() ? -1 : it->second;
+  };
+  // The matched keyframe fixes the gauge; without it the graph would float.
+  if (slotOf(loop.matched) < 0 || slotOf(current) < 0) return false;
   std::vector<PoseGraphEdge> edges;
   std::set<std::pair<long, long>> added;
   auto addEdge = [&](KeyFrame* from, KeyFrame* to, const Sim3& S_to_from, double weight) {
-    if (!slot.count(from) || !slot.count(to) || from == to) return;
+    const int a = slotOf(from), b = slotOf(to);
+    if (a < 0 || b < 0 || from == to) return;
     const auto key = std::minmax(from->id(), to->id());
     if (!added.insert(key).second) return;
-    edges.push_back({slot[from], slot[to], S_to_from, weight});
+    edges.push_back({a, b, S_to_from, weight});
+  };
+  // Measurement from the corrected poses (the loop's own links).
+  auto correctedRelative = [&](KeyFrame* from, KeyFrame* to) {
+    const int a = slotOf(from), b = slotOf(to);
+    return a < 0 || b < 0 ? Sim3() : vertices[b].S_cw * vertices[a].S_cw.inverse();
   };
   // The relative measurement before correction (what the map measured), except for
   // the new loop links, which come from the corrected poses.
   auto measured = [&](KeyFrame* from, KeyFrame* to) { return uncorrected[to] * uncorrected[from].inverse(); };
   for (const auto& [kf, others] : new_links)
-    for (KeyFrame* other : others) addEdge(kf, other, vertices[slot[other]].S_cw * vertices[slot[kf]].S_cw.inverse(), 1.0);
-  addEdge(current, loop.matched, vertices[slot[loop.matched]].S_cw * vertices[slot[current]].S_cw.inverse(), 1.0);
+    for (KeyFrame* other : others) addEdge(kf, other, correctedRelative(kf, other), 1.0);
+  addEdge(current, loop.matched, correctedRelative(current, loop.matched), 1.0);
   for (KeyFrame* kf : keyframes) {
     if (KeyFrame* parent = kf->parent()) addEdge(kf, parent, measured(kf, parent), 1.0);
     for (KeyFrame* other : kf->loopEdges()) addEdge(kf, other, measured(kf, other), 1.0);
@@ -567,10 +654,11 @@ void LoopClosing::correctLoop(KeyFrame* current, LoopCandidate& loop) {
   for (MapPoint* point : map_.mapPoints()) {
     auto it = corrected_by.find(point);
     KeyFrame* by = it != corrected_by.end() ? it->second : point->reference();
-    if (!by || !slot.count(by)) continue;
-    point->setPosition(vertices[slot[by]].S_cw.inverse() * (initial[by] * point->position()));
+    const int by_slot = by ? slotOf(by) : -1;
+    if (by_slot < 0) continue;
+    point->setPosition(vertices[by_slot].S_cw.inverse() * (initial[by] * point->position()));
   }
-  for (KeyFrame* kf : keyframes) kf->setPose(rigidPoseFromSim3(vertices[slot[kf]].S_cw));
+  for (size_t k = 0; k < keyframes.size(); ++k) keyframes[k]->setPose(rigidPoseFromSim3(vertices[k].S_cw));
   for (MapPoint* point : map_.mapPoints())
     if (point->reference() && !point->reference()->isBad()) point->updateNormalAndDepth(point->reference()->pyramid());
 
@@ -582,6 +670,7 @@ void LoopClosing::correctLoop(KeyFrame* current, LoopCandidate& loop) {
   last_loop_keyframe_id_ = current->id();
   consistent_groups_.clear();
   map_.informBigChange();
+  return true;
 }
 
 }  // namespace vslam

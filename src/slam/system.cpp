@@ -1,5 +1,7 @@
 #include "vslam/slam/system.hpp"
 
+#include <stdexcept>
+
 #include <spdlog/spdlog.h>
 
 #include "vslam/detect/detection_stage.hpp"
@@ -21,7 +23,11 @@ System::System(const Config& config, const SystemOptions& options)
       frame_builder_(std::make_unique<FrameBuilder>(config, config.camera,
                                                     detection_ ? detection_->dynamicClassIds() : std::vector<int>())),
       local_mapping_(std::make_unique<LocalMapping>(config, *map_, &timer_)),
-      tracking_(std::make_unique<Tracking>(config, *map_, *local_mapping_, &timer_, options.deterministic)) {
+      tracking_(std::make_unique<Tracking>(config, *map_, *local_mapping_, &timer_,
+                                           options.deterministic ? KeyFrameInsertion::Synchronous
+                                           : options.realtime    ? KeyFrameInsertion::DropWhenBusy
+                                                                 : KeyFrameInsertion::WaitForMapping)) {
+  if (options_.after_keyframe_mapped) local_mapping_->setAfterKeyFrameHook(options_.after_keyframe_mapped);
   // An empty vocabulary path switches place recognition off; a bad file is an input error.
   if (!config_.loop.vocabulary.empty()) {
     vocabulary_ = std::make_unique<Vocabulary>(Vocabulary::load(resolveVocabularyPath(config_.loop.vocabulary)));
@@ -31,6 +37,7 @@ System::System(const Config& config, const SystemOptions& options)
           std::make_unique<LoopClosing>(config_, *map_, *vocabulary_, *database_, *local_mapping_, &timer_);
     local_mapping_->setPlaceRecognition(vocabulary_.get(), database_.get(), loop_closing_.get());
     tracking_->setPlaceRecognition(vocabulary_.get(), database_.get());
+    tracking_->setLoopClosing(loop_closing_.get());
   } else {
     spdlog::warn("no vocabulary: relocalisation only retries the last keyframe and loop closing is off");
   }
@@ -40,7 +47,32 @@ System::System(const Config& config, const SystemOptions& options)
   }
 }
 
-System::~System() { finish(); }
+System::~System() {
+  try {
+    finish();
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());  // a destructor must not throw; finish() reported it to callers that asked
+  }
+}
+
+void System::rethrowWorkerFailure() const {
+  auto rethrow = [](const std::exception_ptr& failure, const char* thread) {
+    if (!failure) return;
+    try {
+      std::rethrow_exception(failure);
+    } catch (const std::exception& e) {
+      throw std::runtime_error(std::string(thread) + " thread failed: " + e.what());
+    } catch (...) {
+      throw std::runtime_error(std::string(thread) + " thread failed");
+    }
+  };
+  rethrow(local_mapping_->failure(), "local mapping");
+  if (loop_closing_) rethrow(loop_closing_->failure(), "loop closing");
+}
+
+LoopClosingState System::loopClosingState() const {
+  return loop_closing_ ? loop_closing_->state() : LoopClosingState{};
+}
 
 void System::submitAhead(int index, const cv::Mat& image) {
   if (!detection_ || detection_submitted_.count(index)) return;
@@ -81,6 +113,7 @@ bool System::processFrame(int index, double timestamp, const cv::Mat& image, con
   }
   // Deterministic mode: loop closing runs synchronously after each frame's mapping.
   if (options_.deterministic && loop_closing_) loop_closing_->processQueued();
+  rethrowWorkerFailure();
   return tracked;
 }
 
@@ -94,6 +127,7 @@ void System::finish() {
     local_mapping_->finish();
     if (loop_closing_) loop_closing_->finish();
   }
+  rethrowWorkerFailure();
   if (config_.loop.final_ba && tracking_->state() != TrackingState::NotInitialized) {
     frames_before_final_ba_ = frameTrajectory();
     keyframes_before_final_ba_ = keyframeTrajectory();
@@ -172,6 +206,9 @@ SystemStats System::stats() const {
   stats.local_bundle_adjustments = local_mapping_->localBundleAdjustments();
   stats.culled_keyframes = local_mapping_->culledKeyFrames();
   stats.relocalisations = tracking_->relocalisations();
+  stats.map_resets = tracking_->mapResets();
+  stats.keyframe_waits = tracking_->keyframeWaits();
+  if (loop_closing_) stats.implausible_loops_rejected = loop_closing_->implausibleLoopsRejected();
   return stats;
 }
 

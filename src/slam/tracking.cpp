@@ -15,6 +15,7 @@
 #include "vslam/place/keyframe_database.hpp"
 #include "vslam/place/vocabulary.hpp"
 #include "vslam/slam/local_mapping.hpp"
+#include "vslam/slam/loop_closing.hpp"
 #include "vslam/slam/map_matching.hpp"
 
 namespace vslam {
@@ -32,8 +33,26 @@ constexpr int kRelocMinInliers = 50;
 
 }  // namespace
 
-Tracking::Tracking(const Config& config, Map& map, LocalMapping& local_mapping, StageTimer* timer, bool deterministic)
-    : config_(config), map_(map), local_mapping_(local_mapping), timer_(timer), deterministic_(deterministic) {}
+Tracking::Tracking(const Config& config, Map& map, LocalMapping& local_mapping, StageTimer* timer,
+                   KeyFrameInsertion insertion)
+    : config_(config), map_(map), local_mapping_(local_mapping), timer_(timer), insertion_(insertion) {}
+
+// Pose of a frame recorded relative to `reference`, through culled keyframes' parents.
+static SE3 poseThroughReference(KeyFrame* reference, SE3 T_c_ref, KeyFrame** live_reference) {
+  while (reference->isBad() && reference->parent()) {
+    T_c_ref = T_c_ref * reference->poseRelativeToParent();
+    reference = reference->parent();
+  }
+  if (live_reference) *live_reference = reference;
+  return T_c_ref * reference->pose();
+}
+
+void Tracking::refreshLastFramePose() {
+  if (!last_frame_ || !last_frame_->has_pose || records_.empty()) return;
+  const FrameRecord& last = records_.back();
+  if (!last.tracked || !last.reference || last.frame_id != last_frame_->id) return;
+  last_frame_->T_cw = poseThroughReference(last.reference, last.T_c_ref, nullptr);
+}
 
 bool Tracking::track(Frame& frame) {
   FrameRecord record;
@@ -55,15 +74,15 @@ bool Tracking::track(Frame& frame) {
     return true;
   }
 
-  std::unique_lock<std::mutex> lock(map_.mutex());
-  // After a loop correction or full BA the last frame's pose is stale: take it
-  // again from its reference keyframe, whose pose was corrected.
-  if (map_.bigChangeIndex() != seen_big_change_) {
-    seen_big_change_ = map_.bigChangeIndex();
-    if (last_frame_ && last_frame_->has_pose && !records_.empty() && records_.back().tracked &&
-        records_.back().reference && !records_.back().reference->isBad())
-      last_frame_->T_cw = records_.back().T_c_ref * records_.back().reference->pose();
+  if (insertion_ == KeyFrameInsertion::WaitForMapping) {
+    // The previous keyframe's new points must be in the map before this frame
+    // is tracked; otherwise a fast Tracking thread would keep tracking against
+    // a map that lags one keyframe behind (and starve when tracking is weak).
+    ScopedStage wait(timer_, "keyframe_link_wait");
+    local_mapping_.waitUntilLinked();
   }
+  std::unique_lock<std::mutex> lock(map_.mutex());
+  refreshLastFramePose();
   bool ok = false;
   if (state_ == TrackingState::Ok) {
     if (velocity_ && last_frame_) ok = trackWithMotionModel(frame);
@@ -86,7 +105,26 @@ bool Tracking::track(Frame& frame) {
       velocity_ = frame.T_cw * last_frame_->T_cw.inverse();
     else
       velocity_.reset();
-    if (needNewKeyFrame(frame)) createKeyFrame(frame);
+    if (needNewKeyFrame(frame)) {
+      if (insertion_ == KeyFrameInsertion::WaitForMapping && !local_mapping_.acceptsKeyFrames()) {
+        // Back-pressure: let Local Mapping finish the keyframe in hand. The map
+        // may change meanwhile (local BA, culling, a loop correction), so the
+        // frame keeps its pose relative to its reference keyframe.
+        KeyFrame* reference = reference_keyframe_;
+        const SE3 T_c_ref = frame.T_cw * reference->pose().inverse();
+        ++keyframe_waits_;
+        lock.unlock();
+        {
+          ScopedStage wait(timer_, "keyframe_wait");
+          local_mapping_.waitUntilIdle();
+        }
+        lock.lock();
+        KeyFrame* live = nullptr;
+        frame.T_cw = poseThroughReference(reference, T_c_ref, &live);
+        reference_keyframe_ = live;
+      }
+      createKeyFrame(frame);
+    }
     // Outliers must not be projected into the next frame.
     for (size_t i = 0; i < frame.size(); ++i)
       if (frame.outlier[i]) frame.map_points[i] = nullptr;
@@ -104,15 +142,17 @@ bool Tracking::track(Frame& frame) {
     record.T_c_ref = frame.T_cw * reference_keyframe_->pose().inverse();
   }
   records_.push_back(record);
-  lock.unlock();
-
-  if (deterministic_) local_mapping_.processQueued();
-
   // Early failure: a map just initialised (a few keyframes) is not worth
   // keeping. A larger map is kept while relocalisation can still succeed.
-  if (!ok && map_.keyframeCount() <= kResetMaxKeyFrames) {
+  const bool reset = !ok && map_.keyframeCount() <= kResetMaxKeyFrames;
+  lock.unlock();
+
+  if (insertion_ == KeyFrameInsertion::Synchronous) local_mapping_.processQueued();
+
+  if (reset) {
     spdlog::warn("tracking lost soon after initialisation: resetting the map");
     resetMap();
+    return false;  // the frame's matches belonged to the old map: nothing of it is kept
   }
   last_frame_ = frame;
   last_frame_->has_pose = ok;
@@ -483,8 +523,8 @@ bool Tracking::needNewKeyFrame(const Frame& frame) const {
   if (!(enough_time_or_weak && new_content)) return false;
   // Local Mapping must be ready to take it; otherwise ask it to wrap up its BA.
   if (local_mapping_.acceptsKeyFrames()) return true;
+  if (insertion_ != KeyFrameInsertion::DropWhenBusy) return true;  // inserted once the mapper has caught up
   local_mapping_.interruptBundleAdjustment();
-  if (deterministic_) return true;  // the mapper always catches up before the next frame
   // Weak tracking cannot wait for an idle mapper (fast forward motion loses the
   // map within a few frames): queue one keyframe behind the one in work.
   return matches_inliers_ < params.min_tracked_points && local_mapping_.queuedKeyFrames() < 1;
@@ -492,6 +532,7 @@ bool Tracking::needNewKeyFrame(const Frame& frame) const {
 
 void Tracking::createKeyFrame(Frame& frame) {
   KeyFrame* keyframe = map_.createKeyFrame(frame);
+  keyframe->setFallbackParent(reference_keyframe_);
   reference_keyframe_ = keyframe;
   last_keyframe_ = keyframe;
   last_keyframe_frame_id_ = frame.id;
@@ -500,7 +541,10 @@ void Tracking::createKeyFrame(Frame& frame) {
 }
 
 void Tracking::resetMap() {
+  // Stop the other threads' work on the old map first: nothing may hold its
+  // pointers or ids (queued keyframes, consistency groups, a running full BA).
   local_mapping_.reset();
+  if (loop_closing_) loop_closing_->reset();
   std::lock_guard<std::mutex> lock(map_.mutex());
   // Keyframes of the failed map no longer exist as references for the trajectory.
   for (FrameRecord& record : records_) {
@@ -516,6 +560,7 @@ void Tracking::resetMap() {
   keyframes_created_ = 0;
   initialised_at_index_ = -1;
   state_ = TrackingState::NotInitialized;
+  ++map_resets_;
   map_.clear();
 }
 

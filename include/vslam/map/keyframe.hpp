@@ -64,15 +64,29 @@ class KeyFrame {
   const std::vector<KeyFrame*>& orderedCovisibles() const { return ordered_covisibles_; }
   int weight(KeyFrame* other) const;
 
-  // Spanning tree (strongest covisibility parent) and loop edges.
+  // Spanning tree (strongest covisibility parent) and loop edges. Invariant:
+  // every live keyframe but the root (id 0) has a live parent, so the tree
+  // reaches every keyframe. A keyframe that shares no point with any other when
+  // it is linked takes its fallback parent (Tracking's reference keyframe when
+  // it was created, or the nearest live ancestor of it) until a real
+  // covisibility link replaces it.
   KeyFrame* parent() const { return parent_; }
+  void setFallbackParent(KeyFrame* fallback) { fallback_parent_ = fallback; }
   const KeyFrameSet& children() const { return children_; }
   void changeParent(KeyFrame* parent);
   void addLoopEdge(KeyFrame* other) { loop_edges_.insert(other); }
   const KeyFrameSet& loopEdges() const { return loop_edges_; }
 
-  // Removes the keyframe from the graph (reparenting its children) and detaches its points.
+  // Removes the keyframe from the graph (reparenting its children) and detaches
+  // its points. Does nothing for the root, a keyframe held from erasure, or one
+  // without a parent to hand its children to.
   void setBad();
+  // Loop Closing holds the keyframes it is working with, so that Local Mapping
+  // cannot cull them between verification and correction (each hold is
+  // released once); loop keyframes are held for good (not_erase).
+  void holdFromErase() { ++erase_holds_; }
+  void releaseErase() { if (erase_holds_ > 0) --erase_holds_; }
+  bool erasable() const { return id_ != 0 && !not_erase && erase_holds_ == 0; }
   // Pose relative to its parent, frozen when the keyframe is culled, so frames
   // that referred to it still get a pose: T_this_parent.
   const SE3& poseRelativeToParent() const { return T_c_parent_; }
@@ -92,6 +106,7 @@ class KeyFrame {
 
  private:
   void updateOrder();
+  bool isDescendant(const KeyFrame* other) const;  // true when `other` is this keyframe or below it in the tree
 
   long id_;
   long frame_id_;
@@ -105,10 +120,12 @@ class KeyFrame {
   std::vector<KeyFrame*> ordered_covisibles_;
   std::vector<int> ordered_weights_;
   KeyFrame* parent_ = nullptr;
+  bool parent_is_fallback_ = false;
+  KeyFrame* fallback_parent_ = nullptr;
+  int erase_holds_ = 0;
   KeyFrameSet children_;
   KeyFrameSet loop_edges_;
   SE3 T_c_parent_;
-  bool first_connection_ = true;
   bool bad_ = false;
 };
 

@@ -29,8 +29,13 @@ class MapPoint {
   const KeyFrameMap<int>& observations() const { return observations_; }
   int observationCount() const { return static_cast<int>(observations_.size()); }
   void addObservation(KeyFrame* keyframe, int keypoint);
-  // Removes one observation; the point turns bad when fewer than 2 remain.
+  // Removes one observation; the point turns bad when fewer than 2 remain, or,
+  // once it has passed its probation (confirm()), fewer than the map's minimum
+  // (the paper: a map point lives only while seen in at least 3 keyframes).
   void eraseObservation(KeyFrame* keyframe);
+  // Called by Local Mapping when the point survives its probation.
+  void confirm(int min_observations) { confirmed_min_observations_ = min_observations; }
+  bool confirmed() const { return confirmed_min_observations_ > 0; }
   int keypointIn(const KeyFrame* keyframe) const;  // -1 if not observed there
   KeyFrame* reference() const { return reference_; }
   long firstKeyframeId() const { return first_keyframe_id_; }
@@ -85,6 +90,7 @@ class MapPoint {
   double class_confidence_ = 0.0;
   cv::Vec3b colour_{128, 128, 128};
   bool bad_ = false;
+  int confirmed_min_observations_ = 0;  // 0 while on probation
   MapPoint* replaced_by_ = nullptr;
 };
 

@@ -28,7 +28,8 @@ constexpr double kChi2Mono = 5.991;    // 2 degrees of freedom
 constexpr double kChi2Stereo = 7.815;  // 3 degrees of freedom
 
 // Below this depth (camera z, in map units) a point counts as behind the camera:
-// its residual and Jacobians are zero, and outlier classification rejects it.
+// its residual keeps growing with the distance behind (no cost cliff; see
+// reprojectionResidual), and outlier classification rejects it.
 constexpr double kMinPositiveDepth = 1e-6;
 
 // RGB-D observations become stereo ones: the right-image coordinate a stereo
@@ -101,10 +102,24 @@ void reprojectionResidual(const ProjectionModel& model, double sqrt_information,
                           double* residuals, Eigen::Matrix<double, kResiduals, 3>* d_residual_d_pc) {
   Eigen::Map<Eigen::Matrix<double, kResiduals, 1>> r(residuals);
   if (p_c.z() < kMinPositiveDepth) {
-    // Behind the camera the projection is meaningless: contribute nothing
-    // rather than inf/NaN; outlier classification rejects the observation.
-    r.setZero();
-    if (d_residual_d_pc) d_residual_d_pc->setZero();
+    // Behind (or at) the camera the projection is meaningless. A zero residual
+    // there would be a cost cliff the optimiser could slide a point or pose
+    // into. Instead every coordinate is off by two focal lengths (worse than
+    // any point in front that projects into the image) plus as much again per
+    // unit of "behindness" b = (z_min - z) / |p|, in (0, 2]: the cost keeps
+    // rising as the point moves back, and the Jacobian points the way out.
+    // It stays bounded, with Jacobians of the size of in-front ones, so one
+    // such observation cannot swamp the others before outlier classification
+    // rejects it.
+    const double norm = std::max(p_c.norm(), kMinPositiveDepth);
+    const double behind = (kMinPositiveDepth - p_c.z()) / norm;
+    // d(behind)/d(p_c)
+    const Vec3 d_behind = -Vec3::UnitZ() / norm - (kMinPositiveDepth - p_c.z()) * p_c / (norm * norm * norm);
+    const double focal[3] = {model.fx, model.fy, model.fx};
+    for (int i = 0; i < kResiduals; ++i) {
+      r(i) = sqrt_information * focal[i] * (2.0 + behind);
+      if (d_residual_d_pc) d_residual_d_pc->row(i) = sqrt_information * focal[i] * d_behind.transpose();
+    }
     return;
   }
   const double inv_z = 1.0 / p_c.z();

@@ -5,10 +5,13 @@
 #include <atomic>
 #include <condition_variable>
 #include <deque>
+#include <exception>
+#include <functional>
 #include <list>
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "vslam/core/config.hpp"
 #include "vslam/core/stage_timer.hpp"
@@ -21,6 +24,12 @@ class Vocabulary;
 class KeyframeDatabase;
 class LoopClosing;
 
+// Culls the covisible neighbours of `keyframe` that are redundant: more than
+// `redundant_ratio` of their points are seen by at least three other keyframes
+// at the same or a finer scale. Returns the keyframes culled (set bad), in the
+// order they were examined. Caller holds the map lock.
+std::vector<KeyFrame*> cullRedundantKeyFrames(KeyFrame* keyframe, double redundant_ratio);
+
 class LocalMapping {
  public:
   LocalMapping(const Config& config, Map& map, StageTimer* timer);
@@ -31,6 +40,17 @@ class LocalMapping {
   // True when the queue is empty and no keyframe is being processed.
   bool acceptsKeyFrames() const { return accepting_.load(); }
   size_t queuedKeyFrames() const;
+  // Back-pressure for offline runs: blocks until the queue is empty and no
+  // keyframe is being processed (or the thread has failed or stopped). The
+  // caller must not hold the map lock. The wait is bounded by the mapping of
+  // one keyframe (its local BA has a fixed iteration cap).
+  void waitUntilIdle();
+  // Blocks until every inserted keyframe has been linked into the map with its
+  // new points (triangulation and fusion done; its local BA may still run), or
+  // the thread has failed or stopped. The caller must not hold the map lock.
+  void waitUntilLinked();
+  // The first exception that stopped the thread, or null.
+  std::exception_ptr failure() const;
   // Asks a running local BA to stop early (a new keyframe is waiting).
   void interruptBundleAdjustment() { abort_ba_.store(true); }
 
@@ -45,6 +65,9 @@ class LocalMapping {
     loop_closing_ = loop_closing;
   }
 
+  // Called after each keyframe is mapped, on the mapping thread (see SystemOptions).
+  void setAfterKeyFrameHook(std::function<void(long)> hook) { after_keyframe_ = std::move(hook); }
+
   // Loop Closing stops the thread while it corrects a loop: pause() returns
   // once the keyframe in hand is done; queued keyframes wait until resume().
   void pause();
@@ -56,19 +79,19 @@ class LocalMapping {
   void start();
   void finish();  // processes what is queued, then stops the thread
 
-  int localBundleAdjustments() const { return local_ba_count_; }
-  int culledKeyFrames() const { return culled_keyframes_; }
+  int localBundleAdjustments() const { return local_ba_count_.load(); }
+  int culledKeyFrames() const { return culled_keyframes_.load(); }
 
  private:
   void run();
   bool queueEmpty() const;
   void processKeyFrame(KeyFrame* keyframe);
+  void markLinked();
   void linkKeyFrame(KeyFrame* keyframe);
   void cullRecentMapPoints(KeyFrame* keyframe);
   void triangulateNewPoints(KeyFrame* keyframe);
   void fuseDuplicates(KeyFrame* keyframe);
   void localBundleAdjustment(KeyFrame* keyframe);
-  void cullRedundantKeyFrames(KeyFrame* keyframe);
   void maybeRecordBundleProblem(const PinholeCamera& camera, const BundleProblem& problem);
 
   Config config_;
@@ -83,14 +106,19 @@ class LocalMapping {
   std::atomic<bool> abort_ba_{false};
   bool finish_requested_ = false;
   bool paused_ = false;  // guarded by queue_mutex_
+  std::exception_ptr failure_;  // guarded by queue_mutex_
+  long inserted_count_ = 0;     // keyframes inserted; guarded by queue_mutex_
+  long linked_count_ = 0;       // of those, linked (or dropped); guarded by queue_mutex_
   std::thread thread_;
   const Vocabulary* vocabulary_ = nullptr;
   KeyframeDatabase* database_ = nullptr;
   LoopClosing* loop_closing_ = nullptr;
+  std::function<void(long)> after_keyframe_;
 
   std::list<MapPoint*> recent_points_;  // touched only by the mapping step
-  int local_ba_count_ = 0;
-  int culled_keyframes_ = 0;
+  // Written by the mapping thread, read by the caller's (statistics).
+  std::atomic<int> local_ba_count_{0};
+  std::atomic<int> culled_keyframes_{0};
 
   // $VSLAM_RECORD_BA=path: the first local BA problem with at least
   // $VSLAM_RECORD_BA_MIN_KEYFRAMES (default 10) free keyframes is saved there

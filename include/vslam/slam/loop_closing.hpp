@@ -12,6 +12,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <deque>
+#include <exception>
 #include <mutex>
 #include <set>
 #include <thread>
@@ -61,6 +62,28 @@ struct FullBundleAdjustmentControl {
 FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations,
                                                    const FullBundleAdjustmentControl& control = {});
 
+// Plausibility of a loop's Sim(3) scale correction. Monocular scale drifts by
+// a few per cent over a loop; a correction outside [0.5, 2] more often means a
+// wrong or degenerate match (far or planar points, a repeated texture) than
+// real drift, and closing it would warp the whole map. Such a loop is closed
+// only when the geometry verifies it strongly: at least 3x the usual inliers
+// (after the projection search). Within [0.5, 2] the usual minimum applies.
+struct LoopScaleRule {
+  double min_plausible_scale = 0.5;
+  double max_plausible_scale = 2.0;
+  int min_inliers = 40;            // ORB-SLAM's value
+  int min_inliers_implausible = 120;
+};
+bool loopAccepted(double scale, int inliers, const LoopScaleRule& rule = {});
+
+// What Loop Closing holds between keyframes (for tests and reports).
+struct LoopClosingState {
+  size_t queued = 0;
+  size_t consistent_groups = 0;
+  long last_loop_keyframe_id = -1;
+  bool full_ba_running = false;
+};
+
 class LoopClosing {
  public:
   LoopClosing(const Config& config, Map& map, const Vocabulary& vocabulary, KeyframeDatabase& database,
@@ -74,6 +97,14 @@ class LoopClosing {
   void start();          // threaded mode
   // Processes what is queued, stops the thread, then waits for a running full BA to merge.
   void finish();
+  // Map reset: drops queued keyframes and consistency groups, waits for the
+  // keyframe in hand, and stops a running full BA without merging it.
+  void reset();
+  LoopClosingState state() const;
+  // The first exception that stopped the thread (or its full BA), or null.
+  std::exception_ptr failure() const;
+  // Loops rejected by loopAccepted() although their inliers passed the usual minimum.
+  int implausibleLoopsRejected() const { return implausible_rejected_.load(); }
 
   std::vector<LoopRecord> loops() const;
 
@@ -96,7 +127,8 @@ class LoopClosing {
   // Caller holds the map lock for these two.
   std::vector<KeyFrame*> detectCandidates(KeyFrame* current);
   bool computeSim3(KeyFrame* current, const std::vector<KeyFrame*>& candidates, LoopCandidate& loop);
-  void correctLoop(KeyFrame* current, LoopCandidate& loop);
+  // False (and nothing changed) when a keyframe of the loop went bad meanwhile.
+  bool correctLoop(KeyFrame* current, LoopCandidate& loop);
   // The full BA after a correction: on its own thread in threaded mode, so that
   // the next keyframes are checked for loops meanwhile; inline in deterministic mode.
   void startFullBundleAdjustment();
@@ -113,10 +145,13 @@ class LoopClosing {
   std::vector<ConsistentGroup> consistent_groups_;
   long last_loop_keyframe_id_ = -1;
 
-  mutable std::mutex mutex_;  // guards queue_, finish_requested_, loops_
-  std::condition_variable cv_;
+  mutable std::mutex mutex_;  // guards queue_, finish_requested_, processing_, failure_, loops_
+  mutable std::condition_variable cv_;
   std::deque<long> queue_;  // keyframe ids: a map reset may free queued keyframes
   bool finish_requested_ = false;
+  bool processing_ = false;
+  std::exception_ptr failure_;
+  std::atomic<int> implausible_rejected_{0};
   std::vector<LoopRecord> loops_;
   std::thread thread_;
 

@@ -2,6 +2,7 @@
 // The System facade: owns the map, runs Tracking on the caller's thread and
 // Local Mapping on its own (or synchronously in deterministic mode), and gives
 // back trajectories and the map for export.
+#include <functional>
 #include <memory>
 #include <set>
 #include <string>
@@ -24,10 +25,18 @@ class Vocabulary;
 class KeyframeDatabase;
 class LoopClosing;
 struct LoopRecord;
+struct LoopClosingState;
 class DetectionStage;
 
 struct SystemOptions {
   bool deterministic = false;  // Local Mapping runs synchronously after each keyframe
+  // Live camera (--realtime): a keyframe needed while Local Mapping is busy is
+  // skipped, as ORB-SLAM does, instead of waiting for it (the offline default).
+  bool realtime = false;
+  // Called on the Local Mapping thread after each keyframe is mapped (its id);
+  // may be empty. For observers such as tests; an exception thrown here stops
+  // Local Mapping like any other and reaches the caller of processFrame/finish.
+  std::function<void(long)> after_keyframe_mapped;
 };
 
 struct ExportedMapPoint {
@@ -54,6 +63,9 @@ struct SystemStats {
   int local_bundle_adjustments = 0;
   int culled_keyframes = 0;
   int relocalisations = 0;
+  int map_resets = 0;       // maps thrown away after losing tracking right after initialisation
+  int keyframe_waits = 0;   // keyframes that waited for Local Mapping (back-pressure)
+  int implausible_loops_rejected = 0;
 };
 
 // The detector's part of a run, for report.json's "detector".
@@ -106,10 +118,15 @@ class System {
   std::vector<ObjectLandmark> objectMap(const ObjectMapParams& params = ObjectMapParams()) const;
   int lastTrackedPoints() const;
   StageTimer& timer() { return timer_; }
+  // Loop Closing's bookkeeping (empty state without it); waits for the keyframe in hand.
+  LoopClosingState loopClosingState() const;
 
  private:
   Config config_;
   SystemOptions options_;
+  // Rethrows, on the caller's thread, an exception that stopped a worker thread.
+  void rethrowWorkerFailure() const;
+
   StageTimer timer_;
   std::unique_ptr<Map> map_;
   std::unique_ptr<Vocabulary> vocabulary_;  // null: no relocalisation by BoW, no loop closing

@@ -15,10 +15,25 @@
 namespace vslam {
 
 class LocalMapping;
+class LoopClosing;
 class Vocabulary;
 class KeyframeDatabase;
 
 enum class TrackingState { NotInitialized, Ok, Lost };
+
+// What Tracking does with a keyframe it needs while Local Mapping is busy.
+enum class KeyFrameInsertion {
+  // Deterministic mode: Local Mapping runs on Tracking's thread after each frame.
+  Synchronous,
+  // Offline threaded runs (images from disk, the default): never drop a
+  // keyframe; wait, without the map lock, until Local Mapping has finished the
+  // keyframe in hand, then insert. Tracking is never more than one keyframe
+  // ahead of the map, so the result does not depend on the machine's speed.
+  WaitForMapping,
+  // Live (--realtime): as ORB-SLAM, skip the keyframe while Local Mapping is
+  // busy (asking it to stop its BA), unless tracking is weak and nothing is queued.
+  DropWhenBusy,
+};
 
 // What became of one frame, kept for the trajectory: its pose relative to its
 // reference keyframe, so later keyframe corrections carry over.
@@ -33,7 +48,8 @@ struct FrameRecord {
 
 class Tracking {
  public:
-  Tracking(const Config& config, Map& map, LocalMapping& local_mapping, StageTimer* timer, bool deterministic);
+  Tracking(const Config& config, Map& map, LocalMapping& local_mapping, StageTimer* timer,
+           KeyFrameInsertion insertion);
 
   // Relocalisation needs both; without them a lost frame only retries the reference keyframe.
   void setPlaceRecognition(const Vocabulary* vocabulary, const KeyframeDatabase* database) {
@@ -41,6 +57,10 @@ class Tracking {
     database_ = database;
   }
   int relocalisations() const { return relocalisations_; }
+  // A map reset (lost right after initialisation) also resets Loop Closing.
+  void setLoopClosing(LoopClosing* loop_closing) { loop_closing_ = loop_closing; }
+  int mapResets() const { return map_resets_; }
+  int keyframeWaits() const { return keyframe_waits_; }  // keyframes that waited for Local Mapping
 
   // Tracks one frame; returns true when its pose is known.
   bool track(Frame& frame);
@@ -62,12 +82,17 @@ class Tracking {
   bool needNewKeyFrame(const Frame& frame) const;
   void createKeyFrame(Frame& frame);
   void resetMap();
+  // The last frame's pose again from its reference keyframe (following culled
+  // ones up the spanning tree), so that local BA and loop corrections reach the
+  // motion model's prediction.
+  void refreshLastFramePose();
 
   Config config_;
   Map& map_;
   LocalMapping& local_mapping_;
   StageTimer* timer_;
-  bool deterministic_;
+  KeyFrameInsertion insertion_;
+  LoopClosing* loop_closing_ = nullptr;
 
   TrackingState state_ = TrackingState::NotInitialized;
   std::unique_ptr<Frame> init_reference_;   // first frame of a two-view initialisation attempt
@@ -88,7 +113,8 @@ class Tracking {
   const Vocabulary* vocabulary_ = nullptr;
   const KeyframeDatabase* database_ = nullptr;
   int relocalisations_ = 0;
-  int seen_big_change_ = 0;
+  int map_resets_ = 0;
+  int keyframe_waits_ = 0;
 };
 
 }  // namespace vslam

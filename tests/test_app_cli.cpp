@@ -90,10 +90,30 @@ TEST(CliRun, KittiAndMaxFramesAndOutputFolder) {
   EXPECT_EQ(report["sequence"], "kitti/00");
 }
 
+// --realtime plays the frames at their timestamps: the run lasts at least as
+// long as the sequence, and every frame is either processed or counted as
+// dropped (it arrived while Tracking was busy with an earlier one).
+TEST(CliRun, RealtimePlaysAtTheTimestampsAndCountsDroppedFrames) {
+  const fs::path out = test::scratchDir("cli_run_realtime") / "run";
+  const Outcome run = vslam("run --seq tum/fr3_teddy --max-frames 60 --detector none --no-render --realtime --out " +
+                            quoted(out.string()));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json report = nlohmann::json::parse(slurp(out / "report.json"));
+  EXPECT_EQ(report["realtime"], true);
+  EXPECT_EQ(report["frames_total"].get<int>() + report["frames_dropped"].get<int>(), 60);
+  // 60 frames at 30 Hz: the last arrives 59 / 30 s after the first.
+  EXPECT_GE(report["wall_s"].get<double>(), 59.0 / 30.0 - 0.05);
+
+  const Outcome both = vslam("run --seq tum/fr3_teddy --max-frames 5 --realtime --deterministic --out " +
+                             quoted((out.parent_path() / "both").string()));
+  EXPECT_EQ(both.exit_code, 2);
+  EXPECT_TRUE(contains(both.err, "--realtime and --deterministic")) << both.err;
+}
+
 TEST(CliRun, HelpListsEveryOptionAndItsDefault) {
   const Outcome help = vslam("run --help");
   EXPECT_EQ(help.exit_code, 0);
-  for (const char* option : {"--seq", "--config", "--data-root", "--mode", "--out", "--detector", "--deterministic",
+  for (const char* option : {"--seq", "--config", "--data-root", "--mode", "--out", "--detector", "--deterministic", "--realtime",
                              "--no-fetch", "--max-frames", "--info", "=mono", "INT:NONNEGATIVE=0", "default: the config's"})
     EXPECT_TRUE(contains(help.out, option)) << option << "\n" << help.out;
 }

@@ -20,8 +20,25 @@
 // merges under it; whatever changed meanwhile follows the spanning tree. (3) A
 // keyframe's bag of words is written once, by Local Mapping without the lock,
 // before the keyframe enters the KeyframeDatabase; nobody reads it earlier.
-// After a correction Map::informBigChange() tells Tracking to re-derive its
-// last frame's pose from its reference keyframe.
+// (4) Between verifying a loop and correcting it Loop Closing releases the
+// lock; it holds both loop keyframes (KeyFrame::holdFromErase) so that Local
+// Mapping cannot cull them meanwhile, and re-checks them under the lock.
+// Tracking re-derives its last frame's pose from its reference keyframe every
+// frame, so local BA and loop corrections reach the motion model.
+//
+// Back-pressure (offline runs, Tracking::KeyFrameInsertion::WaitForMapping):
+// Tracking never holds the lock while it waits for Local Mapping. It inserts
+// a keyframe only when Local Mapping is idle (waiting for the keyframe in
+// hand), and before tracking a frame it waits until the last keyframe's new
+// points are linked into the map (LocalMapping::waitUntilLinked), so no
+// keyframe is dropped and the map Tracking sees does not depend on the
+// machine's speed. A map reset (lost right after initialisation) first
+// drains Local Mapping and Loop Closing (queued ids, consistency groups, a
+// running full BA), then clears the map under the lock.
+//
+// Counters read across threads (statistics) are atomics or guarded by their
+// owner's queue mutex; an exception on a worker thread stops that thread and
+// is rethrown on the caller's by System.
 #include <memory>
 #include <mutex>
 #include <vector>

@@ -1,17 +1,23 @@
 #!/usr/bin/env bash
 # Installs vslam's build dependencies from Debian's archive (idempotent,
 # non-interactive), then configures and builds into ./build.
-#   tools/setup.sh [--build-dir DIR] [--skip-install]
+#   tools/setup.sh [--build-dir DIR] [--skip-install] [--sanitize address|thread] [--target NAME]...
+# --sanitize configures a sanitizer build (no benchmarks); --target (repeatable)
+# builds only the named CMake targets instead of everything.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 build_dir=build
 skip_install=0
+sanitize=
+targets=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --build-dir) build_dir="$2"; shift 2 ;;
     --skip-install) skip_install=1; shift ;;
-    -h|--help) sed -n '2,5p' "$0"; exit 0 ;;
+    --sanitize) sanitize="$2"; shift 2 ;;
+    --target) targets+=("$2"); shift 2 ;;
+    -h|--help) sed -n '2,7p' "$0"; exit 0 ;;
     *) echo "setup.sh: unknown option '$1'" >&2; exit 2 ;;
   esac
 done
@@ -36,8 +42,15 @@ if [ "$skip_install" = 0 ]; then
 fi
 
 jobs=$(nproc 2>/dev/null || echo 2)
-cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$build_dir" -j "$jobs"
+benchmarks=ON
+[ -z "$sanitize" ] || benchmarks=OFF
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DVSLAM_SANITIZE="$sanitize" \
+      -DVSLAM_BUILD_BENCHMARKS="$benchmarks" >/dev/null
+if [ ${#targets[@]} -gt 0 ]; then
+  cmake --build "$build_dir" -j "$jobs" --target "${targets[@]}"
+else
+  cmake --build "$build_dir" -j "$jobs"
+fi
 
 # Data and models are found at run time ($VSLAM_DATA / $VSLAM_MODELS, ./data,
 # ./models, ../shared); say where they were found so a user knows what runs.
@@ -47,4 +60,8 @@ done
 for d in "${VSLAM_MODELS:-}" models ../shared/models; do
   if [ -n "$d" ] && ls "$d"/*/*.weights >/dev/null 2>&1; then echo "setup.sh: detector models found in $d" >&2; break; fi
 done
-echo "setup.sh: built $build_dir/vslam" >&2
+if [ ${#targets[@]} -gt 0 ]; then
+  echo "setup.sh: built ${targets[*]} in $build_dir" >&2
+else
+  echo "setup.sh: built $build_dir/vslam" >&2
+fi

@@ -69,7 +69,8 @@ void LocalMapping::insertKeyFrame(KeyFrame* keyframe) {
 void LocalMapping::waitUntilIdle() {
   std::unique_lock<std::mutex> lock(queue_mutex_);
   queue_cv_.wait(lock, [this] {
-    return (queue_.empty() && !processing_) || failure_ || !thread_.joinable() || finish_requested_;
+    return (queue_.empty() && !processing_ && !paused_ && !pause_requested_) || failure_ || !thread_.joinable() ||
+           finish_requested_;
   });
 }
 
@@ -127,17 +128,27 @@ void LocalMapping::processQueued() {
 
 void LocalMapping::pause() {
   std::unique_lock<std::mutex> lock(queue_mutex_);
-  paused_ = true;
+  pause_requested_ = true;
+  accepting_.store(false);
   abort_ba_.store(true);
-  queue_cv_.wait(lock, [this] { return !processing_; });
+  // In deterministic mode (no thread) the caller has already processed the queue.
+  queue_cv_.wait(lock, [this] { return (queue_.empty() && !processing_) || failure_ || !thread_.joinable(); });
+  paused_ = true;
+  pause_requested_ = false;
 }
 
 void LocalMapping::resume() {
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     paused_ = false;
+    accepting_.store(queue_.empty() && !processing_);
   }
   queue_cv_.notify_all();
+}
+
+bool LocalMapping::paused() const {
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  return paused_ || pause_requested_;
 }
 
 void LocalMapping::start() {
@@ -160,7 +171,7 @@ void LocalMapping::run() {
     KeyFrame* keyframe = nullptr;
     {
       std::unique_lock<std::mutex> lock(queue_mutex_);
-      if (queue_.empty()) accepting_.store(true);
+      if (queue_.empty() && !paused_ && !pause_requested_) accepting_.store(true);
       queue_cv_.wait(lock, [this] { return !paused_ && (!queue_.empty() || finish_requested_); });
       if (queue_.empty()) return;  // finish requested and nothing left
       keyframe = queue_.front();

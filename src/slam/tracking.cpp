@@ -524,6 +524,7 @@ bool Tracking::needNewKeyFrame(const Frame& frame) const {
   // Local Mapping must be ready to take it; otherwise ask it to wrap up its BA.
   if (local_mapping_.acceptsKeyFrames()) return true;
   if (insertion_ != KeyFrameInsertion::DropWhenBusy) return true;  // inserted once the mapper has caught up
+  if (local_mapping_.paused()) return false;  // a loop is being corrected: no keyframe, as ORB-SLAM
   local_mapping_.interruptBundleAdjustment();
   // Weak tracking cannot wait for an idle mapper (fast forward motion loses the
   // map within a few frames): queue one keyframe behind the one in work.

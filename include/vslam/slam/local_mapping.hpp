@@ -68,10 +68,15 @@ class LocalMapping {
   // Called after each keyframe is mapped, on the mapping thread (see SystemOptions).
   void setAfterKeyFrameHook(std::function<void(long)> hook) { after_keyframe_ = std::move(hook); }
 
-  // Loop Closing stops the thread while it corrects a loop: pause() returns
-  // once the keyframe in hand is done; queued keyframes wait until resume().
+  // Loop Closing stops the thread while it corrects a loop or merges a full
+  // BA: pause() returns once every queued keyframe is linked and mapped, so
+  // that no keyframe sits unlinked (outside the covisibility graph and the
+  // spanning tree) while the map is corrected; until resume() no keyframe is
+  // taken, Tracking inserts none (waitUntilIdle blocks, acceptsKeyFrames() is
+  // false) and paused() is true.
   void pause();
   void resume();
+  bool paused() const;
 
   // Deterministic mode: processes every queued keyframe on the caller's thread.
   void processQueued();
@@ -106,6 +111,7 @@ class LocalMapping {
   std::atomic<bool> abort_ba_{false};
   bool finish_requested_ = false;
   bool paused_ = false;  // guarded by queue_mutex_
+  bool pause_requested_ = false;  // guarded by queue_mutex_
   std::exception_ptr failure_;  // guarded by queue_mutex_
   long inserted_count_ = 0;     // keyframes inserted; guarded by queue_mutex_
   long linked_count_ = 0;       // of those, linked (or dropped); guarded by queue_mutex_

@@ -78,8 +78,15 @@ bool Tracking::track(Frame& frame) {
     // The previous keyframe's new points must be in the map before this frame
     // is tracked; otherwise a fast Tracking thread would keep tracking against
     // a map that lags one keyframe behind (and starve when tracking is weak).
+    // A keyframe made because tracking was weak is waited for entirely (its
+    // local BA and culling too), as in a deterministic run: that is when the
+    // next frame depends most on the map being up to date.
     ScopedStage wait(timer_, "keyframe_link_wait");
-    local_mapping_.waitUntilLinked();
+    if (last_keyframe_was_weak_)
+      local_mapping_.waitUntilIdle();
+    else
+      local_mapping_.waitUntilLinked();
+    last_keyframe_was_weak_ = false;
   }
   std::unique_lock<std::mutex> lock(map_.mutex());
   refreshLastFramePose();
@@ -532,6 +539,7 @@ bool Tracking::needNewKeyFrame(const Frame& frame) const {
 }
 
 void Tracking::createKeyFrame(Frame& frame) {
+  last_keyframe_was_weak_ = matches_inliers_ < config_.tracking.min_tracked_points;
   KeyFrame* keyframe = map_.createKeyFrame(frame);
   keyframe->setFallbackParent(reference_keyframe_);
   reference_keyframe_ = keyframe;

@@ -115,6 +115,7 @@ class Tracking {
   int relocalisations_ = 0;
   int map_resets_ = 0;
   int keyframe_waits_ = 0;
+  bool last_keyframe_was_weak_ = false;  // made with fewer than min_tracked_points tracked
 };
 
 }  // namespace vslam

@@ -17,7 +17,7 @@ while [ $# -gt 0 ]; do
     --skip-install) skip_install=1; shift ;;
     --sanitize) sanitize="$2"; shift 2 ;;
     --target) targets+=("$2"); shift 2 ;;
-    -h|--help) sed -n '2,7p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,6p' "$0"; exit 0 ;;
     *) echo "setup.sh: unknown option '$1'" >&2; exit 2 ;;
   esac
 done

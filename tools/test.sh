@@ -5,12 +5,16 @@
 # --sanitize address (ASan with UBSan) or thread (TSan): builds into build-asan/
 # or build-tsan/ only the test executables holding tests that match
 # $sanitize_tests below, runs those tests, and fails on any sanitizer report
-# that tools/sanitizers/*.supp does not suppress (docs/SANITIZERS.md).
+# that tools/sanitizers/*.supp does not suppress (README, "Sanitizers").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# The tests the sanitizer builds run: a ctest -R regex over "Suite.Name".
-sanitize_tests=${VSLAM_SANITIZE_TESTS:-'Threaded|MapGraph|LocalMapping'}
+# The tests the sanitizer builds run: a ctest -R regex over "Suite.Name"
+# (VSLAM_SANITIZE_TESTS overrides it for one run).
+# The whole-sequence threaded fr1_xyz run is left out: under TSan it would
+# exceed ctest's 400 s timeout; the room loop covers loop closing, culling and
+# the full-BA merge on threads.
+sanitize_tests=${VSLAM_SANITIZE_TESTS:-'MapGraph|LoopScaleRule|AsyncDetector|DetectionStage|SlamThreaded\.(Reset|LocalMappingFailure|CirclingARoomClosesAVerifiedLoopEveryRun)'}
 
 sanitize=
 if [ "${1:-}" = --sanitize ]; then

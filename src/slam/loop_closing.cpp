@@ -624,7 +624,8 @@ bool LoopClosing::correctLoop(KeyFrame* current, LoopCandidate& loop) {
   auto addEdge = [&](KeyFrame* from, KeyFrame* to, const Sim3& S_to_from, double weight) {
     const int a = slotOf(from), b = slotOf(to);
     if (a < 0 || b < 0 || from == to) return;
-    const auto key = std::minmax(from->id(), to->id());
+    // A pair of values: std::minmax returns references, here to temporaries.
+    const std::pair<long, long> key = std::minmax(from->id(), to->id());
     if (!added.insert(key).second) return;
     edges.push_back({a, b, S_to_from, weight});
   };

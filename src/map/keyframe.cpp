@@ -196,6 +196,15 @@ void KeyFrame::setBad() {
   // parent_ is kept: the trajectory of frames referring to this keyframe follows it.
 }
 
+SE3 poseThroughReference(KeyFrame* reference, SE3 T_c_ref, KeyFrame** live_reference) {
+  while (reference->isBad() && reference->parent()) {
+    T_c_ref = T_c_ref * reference->poseRelativeToParent();
+    reference = reference->parent();
+  }
+  if (live_reference) *live_reference = reference;
+  return T_c_ref * reference->pose();
+}
+
 double KeyFrame::medianSceneDepth() const {
   std::vector<double> depths;
   for (MapPoint* point : map_points_)

@@ -44,7 +44,6 @@ void Map::clear() {
   // and roots the spanning tree, and is recognised by its id.
   next_keyframe_id_ = 0;
   next_map_point_id_ = 0;
-  ++big_change_index_;
 }
 
 size_t Map::keyframeCount() const {

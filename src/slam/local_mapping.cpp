@@ -84,7 +84,8 @@ void LocalMapping::waitUntilLinked() {
 void LocalMapping::markLinked() {
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
-    ++linked_count_;
+    // Every keyframe taken from the queue so far (the one in hand included) is linked.
+    linked_count_ = inserted_count_ - static_cast<long>(queue_.size());
   }
   queue_cv_.notify_all();
 }
@@ -193,7 +194,7 @@ void LocalMapping::run() {
         failure_ = failure;
         queue_.clear();
       }
-      linked_count_ = inserted_count_ - static_cast<long>(queue_.size());  // this one is done, linked or not
+      linked_count_ = inserted_count_ - static_cast<long>(queue_.size());  // as markLinked(): done, linked or not
     }
     queue_cv_.notify_all();
     if (failure) return;

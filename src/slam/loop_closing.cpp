@@ -178,7 +178,6 @@ void mergeFullBundleAdjustment(Map& map, const std::vector<KeyFrame*>& keyframes
     KeyFrame* reference = point->reference();
     if (reference && !reference->isBad()) point->updateNormalAndDepth(reference->pyramid());
   }
-  map.informBigChange();
 }
 
 }  // namespace
@@ -670,7 +669,6 @@ bool LoopClosing::correctLoop(KeyFrame* current, LoopCandidate& loop) {
   loop.matched->not_erase = true;
   last_loop_keyframe_id_ = current->id();
   consistent_groups_.clear();
-  map_.informBigChange();
   return true;
 }
 

@@ -147,14 +147,7 @@ std::vector<StampedPose> System::frameTrajectory() const {
   std::vector<StampedPose> trajectory;
   for (const FrameRecord& record : tracking_->records()) {
     if (!record.tracked || !record.reference) continue;
-    // Follow culled reference keyframes up the spanning tree.
-    KeyFrame* reference = record.reference;
-    SE3 T_c_ref = record.T_c_ref;
-    while (reference->isBad() && reference->parent()) {
-      T_c_ref = T_c_ref * reference->poseRelativeToParent();
-      reference = reference->parent();
-    }
-    const SE3 T_cw = T_c_ref * reference->pose();
+    const SE3 T_cw = poseThroughReference(record.reference, record.T_c_ref);
     trajectory.push_back({record.timestamp, T_cw.inverse()});
   }
   return trajectory;

@@ -37,21 +37,11 @@ Tracking::Tracking(const Config& config, Map& map, LocalMapping& local_mapping, 
                    KeyFrameInsertion insertion)
     : config_(config), map_(map), local_mapping_(local_mapping), timer_(timer), insertion_(insertion) {}
 
-// Pose of a frame recorded relative to `reference`, through culled keyframes' parents.
-static SE3 poseThroughReference(KeyFrame* reference, SE3 T_c_ref, KeyFrame** live_reference) {
-  while (reference->isBad() && reference->parent()) {
-    T_c_ref = T_c_ref * reference->poseRelativeToParent();
-    reference = reference->parent();
-  }
-  if (live_reference) *live_reference = reference;
-  return T_c_ref * reference->pose();
-}
-
 void Tracking::refreshLastFramePose() {
   if (!last_frame_ || !last_frame_->has_pose || records_.empty()) return;
   const FrameRecord& last = records_.back();
   if (!last.tracked || !last.reference || last.frame_id != last_frame_->id) return;
-  last_frame_->T_cw = poseThroughReference(last.reference, last.T_c_ref, nullptr);
+  last_frame_->T_cw = poseThroughReference(last.reference, last.T_c_ref);
 }
 
 bool Tracking::track(Frame& frame) {

@@ -94,7 +94,7 @@ class KeyFrame {
   // Median depth of its map points in its camera (scene depth for baselines).
   double medianSceneDepth() const;
 
-  bool not_erase = false;  // held by Loop Closing while it works with it
+  bool not_erase = false;  // a loop keyframe: anchors the essential graph, never culled
   // Scratch for Tracking's local map and Local Mapping.
   long track_local_for_frame = -1;
   long fuse_target_for_kf = -1;
@@ -128,5 +128,11 @@ class KeyFrame {
   SE3 T_c_parent_;
   bool bad_ = false;
 };
+
+// The world-to-camera pose of a frame recorded relative to `reference`
+// (T_c_ref), carried up the spanning tree past culled keyframes, whose
+// poseRelativeToParent() is frozen. `live_reference`, if given, receives the
+// keyframe the walk ends at. Caller holds the map lock.
+SE3 poseThroughReference(KeyFrame* reference, SE3 T_c_ref, KeyFrame** live_reference = nullptr);
 
 }  // namespace vslam

@@ -71,17 +71,12 @@ class Map {
   // Only when no thread holds pointers or ids of the old map.
   void clear();
 
-  // Monotonic counter of changes that invalidate tracking's references (loop corrections).
-  int bigChangeIndex() const { return big_change_index_; }
-  void informBigChange() { ++big_change_index_; }
-
  private:
   mutable std::mutex mutex_;
   std::vector<std::unique_ptr<KeyFrame>> keyframes_;
   std::vector<std::unique_ptr<MapPoint>> map_points_;
   long next_keyframe_id_ = 0;
   long next_map_point_id_ = 0;
-  int big_change_index_ = 0;
 };
 
 }  // namespace vslam

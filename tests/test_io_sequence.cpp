@@ -92,7 +92,7 @@ TEST(Sequence, TumFr1XyzFromTheSharedData) {
   EXPECT_EQ(color.cols, 640);
   EXPECT_EQ(color.rows, 480);
   EXPECT_EQ(seq.loadGray(0).type(), CV_8UC1);
-  const cv::Mat depth = seq.loadDepthMeters(0);
+  const cv::Mat depth = seq.loadDepthMeters(0, color.size());
   ASSERT_EQ(depth.type(), CV_32F);
   cv::Mat valid = depth > 0;
   const double mean_depth = cv::mean(depth, valid)[0];
@@ -124,7 +124,8 @@ TEST(Sequence, KittiOdometry00) {
   EXPECT_DOUBLE_EQ(seq.config.camera.fx, 718.856);
   EXPECT_DOUBLE_EQ(seq.config.camera.cx, 607.1928);
   EXPECT_DOUBLE_EQ(seq.config.camera.cy, 185.2157);
-  EXPECT_NEAR(seq.config.camera.baseline_m, 386.1448 / 718.856, 1e-12);
+  EXPECT_NEAR(seq.config.camera.bf, 386.1448, 1e-9);
+  EXPECT_NEAR(seq.config.camera.baseline(), 386.1448 / 718.856, 1e-12);
   EXPECT_FALSE(seq.hasDepth());
   const cv::Mat gray = seq.loadGray(0);
   EXPECT_EQ(gray.type(), CV_8UC1);
@@ -181,7 +182,7 @@ TEST(Sequence, FolderWithConfigAndImageSizeFromTheFirstImage) {
   EXPECT_TRUE(seq.hasDepth());
   EXPECT_FALSE(seq.hasGroundTruth());
   EXPECT_EQ(seq.groundtruth_path, "");
-  const cv::Mat depth = seq.loadDepthMeters(1);
+  const cv::Mat depth = seq.loadDepthMeters(1, cv::Size(8, 6));
   ASSERT_EQ(depth.type(), CV_32F);
   EXPECT_FLOAT_EQ(depth.at<float>(0, 0), 2.0f);  // 10000 raw / 5000 per metre
   EXPECT_EQ(seq.loadColor(2).at<cv::Vec3b>(0, 0), cv::Vec3b(10, 20, 32));
@@ -197,7 +198,7 @@ TEST(Sequence, MonocularFolderNeedsOnlyRgbTxt) {
   EXPECT_EQ(seq.framesWithDepth(), 0);
   const std::string depth_txt = (root / "depth.txt").string();
   try {
-    seq.loadDepthMeters(0);
+    seq.loadDepthMeters(0, cv::Size(8, 6));
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
     EXPECT_TRUE(contains(e.what(), depth_txt)) << e.what();
@@ -306,10 +307,29 @@ TEST(SequenceErrors, DepthThatIsNot16Bit) {
   options.config_path = tinyCameraSettings("err_depth8");
   const Sequence seq = openSequence(root.string(), options);
   try {
-    seq.loadDepthMeters(0);
+    seq.loadDepthMeters(0, cv::Size(8, 6));
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
     EXPECT_TRUE(contains(e.what(), depth.string() + ": depth image is not a single-channel 16-bit PNG")) << e.what();
+  }
+}
+
+// A depth image of another size than its colour image cannot be registered to
+// it: the error names both files and both sizes (issue 13).
+TEST(SequenceErrors, DepthOfAnotherSizeThanItsColourImage) {
+  const fs::path root = makeTumFolder("err_depth_size", "my_recording");
+  const fs::path depth = root / "depth" / "100.000000.png";
+  cv::imwrite(depth.string(), cv::Mat(3, 4, CV_16UC1, cv::Scalar(5000)));
+  SequenceOptions options;
+  options.config_path = tinyCameraSettings("err_depth_size");
+  const Sequence seq = openSequence(root.string(), options);
+  const cv::Mat colour = seq.loadColor(0);
+  try {
+    seq.loadDepthMeters(0, colour.size());
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(contains(e.what(), depth.string() + ": depth image is 4x3 but its colour image ")) << e.what();
+    EXPECT_TRUE(contains(e.what(), seq.frames[0].image_path + " is 8x6")) << e.what();
   }
 }
 

@@ -77,9 +77,11 @@ int run(RunCommandOptions options) {
       throw InputError(sequence.root, 0, "--mode rgbd needs depth images, and KITTI sequences have none");
     if (sequence.framesWithDepth() == 0)
       throw InputError(sequence.root + "/depth.txt", 0, "no depth images paired (--mode rgbd needs depth.txt)");
+    requireDepthCamera(sequence.config);
     if (!sequence.hasDepth())
-      spdlog::warn("--mode rgbd: {} of {} frames have no depth image",
+      spdlog::warn("--mode rgbd: {} of {} frames have no depth image and are tracked as monocular frames",
                    sequence.frames.size() - sequence.framesWithDepth(), sequence.frames.size());
+    sequence.config.sensor = SensorMode::RgbD;
   }
 
   const PinholeCamera& c = sequence.config.camera;
@@ -96,7 +98,7 @@ int run(RunCommandOptions options) {
   std::cout << std::setprecision(10) << "camera: " << c.name << " " << c.width << "x" << c.height << " fx " << c.fx
             << " fy " << c.fy << " cx " << c.cx << " cy " << c.cy << " k1 " << c.k1 << " k2 " << c.k2 << " p1 " << c.p1
             << " p2 " << c.p2 << " k3 " << c.k3 << " fps " << c.fps;
-  if (c.baseline_m > 0) std::cout << " baseline " << c.baseline_m << " m";
+  if (c.bf > 0) std::cout << " bf " << c.bf << " (baseline " << c.baseline() << " m, close below " << c.closeDepth() << " m)";
   std::cout << " (" << sequence.config.source << ")\n";
   std::cout << "depth: " << sequence.framesWithDepth() << " of " << sequence.frames.size() << " frames paired\n";
   if (sequence.hasGroundTruth()) {

@@ -1,6 +1,7 @@
 // `vslam synth --out DIR`: a synthetic sequence with a true loop (a camera
-// circling inside a textured room, drawn off-screen), in TUM layout with its
-// ground truth and camera, for testing and benchmarking loop closing.
+// circling inside a textured room, drawn off-screen), in TUM RGB-D layout with
+// its rendered depth, ground truth and camera, for testing and benchmarking
+// loop closing, monocular or RGB-D.
 #include <iostream>
 #include <memory>
 
@@ -20,8 +21,8 @@ Command addSynthCommand(CLI::App& app) {
   auto options = std::make_shared<Options>();
   Command command;
   command.cli = app.add_subcommand(
-      "synth", "Render a synthetic loop sequence (camera circling inside a textured room) in TUM layout");
-  command.cli->add_option("--out", options->out, "Folder to write (rgb/, rgb.txt, groundtruth.txt, camera.yaml)")
+      "synth", "Render a synthetic loop sequence (camera circling inside a textured room) in TUM RGB-D layout");
+  command.cli->add_option("--out", options->out, "Folder to write (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt, camera.yaml)")
       ->required();
   command.cli->add_option("--frames", options->room.frames, "Number of frames")->capture_default_str();
   command.cli->add_option("--turns", options->room.turns, "Turns around the room (> 1 revisits the start)")

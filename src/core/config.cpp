@@ -99,7 +99,11 @@ Config loadVslamYaml(const std::string& path) {
   reader.optional(cam, "camera", "k3", c.k3);
   reader.optional(cam, "camera", "fps", c.fps);
   reader.optional(cam, "camera", "depth_factor", c.depth_factor);
-  reader.optional(cam, "camera", "baseline_m", c.baseline_m);
+  reader.optional(cam, "camera", "bf", c.bf);
+  reader.optional(cam, "camera", "th_depth", c.th_depth);
+  reader.optional(cam, "camera", "max_depth_m", c.max_depth_m);
+  if (c.bf < 0 || c.th_depth <= 0 || c.max_depth_m <= 0)
+    throw InputError(path, cam.Mark().line + 1, "camera bf must be >= 0, th_depth and max_depth_m > 0");
   if (c.width <= 0 || c.height <= 0 || c.fx <= 0 || c.fy <= 0)
     throw InputError(path, cam.Mark().line + 1, "camera width, height, fx and fy must be positive");
 
@@ -181,6 +185,7 @@ Config loadOrbSlamSettings(const std::string& path) {
 
   Config config;
   config.source = path;
+  config.orb_slam_settings = true;
   PinholeCamera& c = config.camera;
   c.name = std::filesystem::path(path).stem().string();
   number("Camera.fx", c.fx, true);
@@ -200,6 +205,9 @@ Config loadOrbSlamSettings(const std::string& path) {
   c.width = static_cast<int>(width);
   c.height = static_cast<int>(height);
   number("DepthMapFactor", c.depth_factor, false);
+  number("Camera.bf", c.bf, false);
+  number("ThDepth", c.th_depth, false);
+  if (c.bf < 0 || c.th_depth <= 0) throw InputError(path, 0, "Camera.bf must be >= 0 and ThDepth > 0");
   integer("ORBextractor.nFeatures", config.orb.n_features);
   number("ORBextractor.scaleFactor", config.orb.scale_factor, false);
   integer("ORBextractor.nLevels", config.orb.n_levels);
@@ -218,6 +226,14 @@ Config loadConfig(const std::string& path) {
   if (first_line.rfind("%YAML:", 0) == 0) return loadOrbSlamSettings(path);
   in.close();
   return loadVslamYaml(path);
+}
+
+void requireDepthCamera(const Config& config) {
+  if (config.camera.bf > 0) return;
+  const char* key = config.orb_slam_settings ? "Camera.bf" : "camera.bf";
+  throw InputError(config.source.empty() ? "(default config)" : config.source, 0,
+                   std::string("missing required key '") + key +
+                       "' for RGB-D (fx times the virtual baseline in metres; ORB-SLAM2 uses 40 for TUM)");
 }
 
 std::string resolveVocabularyPath(const std::string& path) {

@@ -123,9 +123,9 @@ void readKittiCalibration(const fs::path& calib_path, PinholeCamera& camera) {
       camera.cy = p[6];
       found_p0 = true;
     } else if (row.fields[0] == "P1:") {
-      // P1 = K [I | -b e_x]: its fourth entry is -fx * baseline.
+      // P1 = K [I | -b e_x]: its fourth entry is -fx * baseline, i.e. -bf.
       const std::vector<double> p = projection(row);
-      if (p[0] > 0) camera.baseline_m = -p[3] / p[0];
+      if (p[0] > 0) camera.bf = -p[3];
     }
   }
   if (!found_p0) throw InputError(file, 0, "no 'P0:' line (the left camera's 3x4 projection matrix)");
@@ -359,7 +359,8 @@ int Sequence::framesWithDepth() const {
       std::count_if(frames.begin(), frames.end(), [](const FrameEntry& f) { return !f.depth_path.empty(); }));
 }
 
-cv::Mat Sequence::readImage(const std::string& path, int imread_flags, int list_line, const char* what) const {
+cv::Mat Sequence::readImage(const std::string& path, int imread_flags, int list_line, const char* what,
+                            const std::string& size_of) const {
   const std::string listed_at =
       list_line > 0 ? " (listed at " + (fs::path(root) / what).string() + ":" + std::to_string(list_line) + ")" : "";
   if (!fs::exists(path)) throw InputError(path, 0, "image file does not exist" + listed_at);
@@ -370,6 +371,7 @@ cv::Mat Sequence::readImage(const std::string& path, int imread_flags, int list_
     throw InputError(path, 0, "cannot decode image: " + e.msg + listed_at);
   }
   if (image.empty()) throw InputError(path, 0, "cannot decode image (not a readable PNG or JPEG)" + listed_at);
+  if (!size_of.empty()) return image;  // the caller compares it with that image
   const PinholeCamera& camera = config.camera;
   if (camera.width > 0 && camera.height > 0 && (image.cols != camera.width || image.rows != camera.height))
     throw InputError(path, 0,
@@ -390,13 +392,19 @@ cv::Mat Sequence::loadGray(size_t i) const {
   return readImage(frame.image_path, cv::IMREAD_GRAYSCALE, frame.list_line, "rgb.txt");
 }
 
-cv::Mat Sequence::loadDepthMeters(size_t i) const {
+cv::Mat Sequence::loadDepthMeters(size_t i, const cv::Size& colour_size) const {
   const FrameEntry& frame = frames.at(i);
   if (frame.depth_path.empty())
     throw InputError(
         (fs::path(root) / "depth.txt").string(), 0,
         "no depth image within 0.02 s of colour frame " + std::to_string(i) + " (" + frame.image_path + ")");
-  const cv::Mat raw = readImage(frame.depth_path, cv::IMREAD_UNCHANGED, 0, "depth.txt");
+  const cv::Mat raw = readImage(frame.depth_path, cv::IMREAD_UNCHANGED, 0, "depth.txt", frame.image_path);
+  if (raw.size() != colour_size)
+    throw InputError(frame.depth_path, 0,
+                     "depth image is " + std::to_string(raw.cols) + "x" + std::to_string(raw.rows) +
+                         " but its colour image " + frame.image_path + " is " + std::to_string(colour_size.width) +
+                         "x" + std::to_string(colour_size.height) +
+                         ": depth must be registered to the colour image, pixel for pixel");
   if (raw.type() != CV_16UC1) throw InputError(frame.depth_path, 0, "depth image is not a single-channel 16-bit PNG");
   if (config.camera.depth_factor <= 0)
     throw InputError(config.source, 0, "camera.depth_factor must be positive to read depth images");

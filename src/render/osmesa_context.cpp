@@ -43,4 +43,17 @@ cv::Mat OsmesaContext::readPixels() {
   return bgr;
 }
 
+cv::Mat OsmesaContext::readDepth(int width, int height) {
+  if (width <= 0 || height <= 0 || width > width_ || height > height_)
+    throw std::runtime_error("OsmesaContext::readDepth: " + std::to_string(width) + "x" + std::to_string(height) +
+                             " does not fit the " + std::to_string(width_) + "x" + std::to_string(height_) + " buffer");
+  makeCurrent();
+  glFinish();
+  cv::Mat depth(height, width, CV_32F);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, width, height, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data);
+  cv::flip(depth, depth, 0);  // bottom row first, as for colour
+  return depth;
+}
+
 }  // namespace vslam

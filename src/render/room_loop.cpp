@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -21,6 +22,11 @@ namespace {
 // Views are drawn at this multiple of the output size and averaged down: the
 // anti-aliasing a real lens gives, so corners do not crawl from frame to frame.
 constexpr int kSupersampling = 2;
+// Depth is drawn at the output size into a corner of the supersampled buffer.
+static_assert(kSupersampling >= 1, "the depth pass needs a buffer at least the camera's size");
+// The 24-bit depth buffer resolves z to about z^2 / kNearPlane / 2^24 (0.03 mm
+// at 5 m); with Mesa's rounding the room's depth is within 0.08 mm, under the
+// 0.2 mm step of a TUM depth image.
 constexpr double kNearPlane = 0.05;
 constexpr double kFarPlane = 50.0;
 
@@ -74,6 +80,52 @@ void addPanels(const Vec3& origin, const Vec3& u, const Vec3& v, int n_u, int n_
     }
 }
 
+// Viewport, projection and model-view for `camera` drawn `scale` times its
+// size, from camera-to-world pose T_wc.
+void loadCamera(const PinholeCamera& camera, double scale, const SE3& T_wc) {
+  const double width = camera.width * scale, height = camera.height * scale;
+  // Intrinsics at the drawn size. A pixel's centre is at window coordinate i + 0.5,
+  // and at pixel coordinate (i + 0.5) / scale - 0.5 once averaged down.
+  const double fx = camera.fx * scale, fy = camera.fy * scale;
+  const double cx = (camera.cx + 0.5) * scale, cy = (camera.cy + 0.5) * scale;
+  glViewport(0, 0, static_cast<GLsizei>(width), static_cast<GLsizei>(height));
+
+  // glFrustum from the pinhole: image rows grow downwards, GL's y upwards (the
+  // read-back flips rows), and GL's camera looks along -z.
+  glMatrixMode(GL_PROJECTION);
+  glLoadIdentity();
+  const double n = kNearPlane;
+  glFrustum(-cx * n / fx, (width - cx) * n / fx, -(height - cy) * n / fy, cy * n / fy, n, kFarPlane);
+
+  // Model-view: world -> OpenCV camera (T_cw), then OpenCV -> GL axes (y and z flipped).
+  const SE3 T_cw = T_wc.inverse();
+  Mat4 view = Mat4::Identity();
+  view.topLeftCorner<3, 3>() = T_cw.R;
+  view.topRightCorner<3, 1>() = T_cw.t;
+  view.row(1) *= -1.0;
+  view.row(2) *= -1.0;
+  glMatrixMode(GL_MODELVIEW);
+  glLoadMatrixd(view.data());  // Eigen is column-major, as GL expects
+}
+
+void drawPanels(const std::vector<Panel>& panels, bool textured) {
+  if (textured) {
+    glEnable(GL_TEXTURE_2D);
+    glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_REPLACE);
+  }
+  constexpr std::array<std::array<float, 2>, 4> kTexCoords = {{{0.f, 0.f}, {1.f, 0.f}, {1.f, 1.f}, {0.f, 1.f}}};
+  for (const Panel& panel : panels) {
+    if (textured) glBindTexture(GL_TEXTURE_2D, panel.texture);
+    glBegin(GL_QUADS);
+    for (int c = 0; c < 4; ++c) {
+      if (textured) glTexCoord2f(kTexCoords[c][0], kTexCoords[c][1]);
+      glVertex3d(panel.corners[c].x(), panel.corners[c].y(), panel.corners[c].z());
+    }
+    glEnd();
+  }
+  if (textured) glDisable(GL_TEXTURE_2D);
+}
+
 }  // namespace
 
 PinholeCamera RoomLoopParams::defaultCamera() {
@@ -85,6 +137,12 @@ PinholeCamera RoomLoopParams::defaultCamera() {
   camera.cx = 319.5;
   camera.cy = 239.5;
   camera.fps = 30.0;
+  // RGB-D as ORB-SLAM2 runs TUM: a virtual baseline of 40 / fx (7.6 cm),
+  // depth trusted as stereo closer than 40 baselines (3 m).
+  camera.depth_factor = 5000.0;
+  camera.bf = 40.0;
+  camera.th_depth = 40.0;
+  camera.max_depth_m = 10.0;
   return camera;
 }
 
@@ -153,49 +211,13 @@ cv::Mat RoomLoopRenderer::render(const SE3& T_wc) {
   OsmesaContext& context = scene_->context;
   context.makeCurrent();
   const PinholeCamera& camera = scene_->params.camera;
-  const double s = kSupersampling;
-  const double width = camera.width * s, height = camera.height * s;
-  // Intrinsics at the drawn size. A pixel's centre is at window coordinate i + 0.5,
-  // and at pixel coordinate (i + 0.5) / s - 0.5 once averaged down.
-  const double fx = camera.fx * s, fy = camera.fy * s;
-  const double cx = (camera.cx + 0.5) * s, cy = (camera.cy + 0.5) * s;
-  glViewport(0, 0, static_cast<GLsizei>(width), static_cast<GLsizei>(height));
   glClearColor(0.f, 0.f, 0.f, 1.f);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   glEnable(GL_DEPTH_TEST);
   glDisable(GL_LIGHTING);
   glDisable(GL_CULL_FACE);
-
-  // glFrustum from the pinhole: image rows grow downwards, GL's y upwards (the
-  // read-back flips rows), and GL's camera looks along -z.
-  glMatrixMode(GL_PROJECTION);
-  glLoadIdentity();
-  const double n = kNearPlane;
-  glFrustum(-cx * n / fx, (width - cx) * n / fx, -(height - cy) * n / fy, cy * n / fy, n, kFarPlane);
-
-  // Model-view: world -> OpenCV camera (T_cw), then OpenCV -> GL axes (y and z flipped).
-  const SE3 T_cw = T_wc.inverse();
-  Mat4 view = Mat4::Identity();
-  view.topLeftCorner<3, 3>() = T_cw.R;
-  view.topRightCorner<3, 1>() = T_cw.t;
-  view.row(1) *= -1.0;
-  view.row(2) *= -1.0;
-  glMatrixMode(GL_MODELVIEW);
-  glLoadMatrixd(view.data());  // Eigen is column-major, as GL expects
-
-  glEnable(GL_TEXTURE_2D);
-  glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_REPLACE);
-  constexpr std::array<std::array<float, 2>, 4> kTexCoords = {{{0.f, 0.f}, {1.f, 0.f}, {1.f, 1.f}, {0.f, 1.f}}};
-  for (const Panel& panel : scene_->panels) {
-    glBindTexture(GL_TEXTURE_2D, panel.texture);
-    glBegin(GL_QUADS);
-    for (int c = 0; c < 4; ++c) {
-      glTexCoord2f(kTexCoords[c][0], kTexCoords[c][1]);
-      glVertex3d(panel.corners[c].x(), panel.corners[c].y(), panel.corners[c].z());
-    }
-    glEnd();
-  }
-  glDisable(GL_TEXTURE_2D);
+  loadCamera(camera, kSupersampling, T_wc);
+  drawPanels(scene_->panels, true);
 
   cv::Mat drawn = context.readPixels();
   cv::Mat image;
@@ -203,29 +225,82 @@ cv::Mat RoomLoopRenderer::render(const SE3& T_wc) {
   return image;
 }
 
+cv::Mat RoomLoopRenderer::renderDepth(const SE3& T_wc) {
+  OsmesaContext& context = scene_->context;
+  context.makeCurrent();
+  const PinholeCamera& camera = scene_->params.camera;
+  glClear(GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);
+  // Only depth is read back, so colour writes (and textures) are skipped.
+  glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+  loadCamera(camera, 1.0, T_wc);
+  drawPanels(scene_->panels, false);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  const cv::Mat window_depth = context.readDepth(camera.width, camera.height);
+
+  // Window depth d of glFrustum(n, f) back to camera z: z = n f / (f - d (f - n)).
+  const double n = kNearPlane, f = kFarPlane;
+  cv::Mat depth(window_depth.size(), CV_32F);
+  for (int row = 0; row < depth.rows; ++row) {
+    const float* d = window_depth.ptr<float>(row);
+    float* z = depth.ptr<float>(row);
+    for (int col = 0; col < depth.cols; ++col)
+      z[col] = d[col] < 1.f ? static_cast<float>(n * f / (f - d[col] * (f - n))) : 0.f;  // 1 = cleared
+  }
+  return depth;
+}
+
+cv::Mat encodeTumDepth(const cv::Mat& depth_m, double depth_factor) {
+  CV_Assert(depth_m.type() == CV_32FC1 && depth_factor > 0);
+  cv::Mat raw(depth_m.size(), CV_16UC1);
+  for (int row = 0; row < raw.rows; ++row) {
+    const float* metres = depth_m.ptr<float>(row);
+    uint16_t* units = raw.ptr<uint16_t>(row);
+    for (int col = 0; col < raw.cols; ++col) {
+      const double value = std::round(metres[col] * depth_factor);
+      // Out of range reads as no measurement, as a sensor reports it, not as the largest value.
+      units[col] = value > 0 && value <= 65535 ? static_cast<uint16_t>(value) : 0;
+    }
+  }
+  return raw;
+}
+
 void writeRoomLoopSequence(const RoomLoopParams& params, const std::string& folder,
                            const std::function<void(int, int)>& progress) {
   namespace fs = std::filesystem;
   const fs::path root(folder);
   fs::create_directories(root / "rgb");
+  fs::create_directories(root / "depth");
   const std::vector<StampedPose> path = roomLoopPath(params);
   RoomLoopRenderer renderer(params);
 
-  std::ofstream list(root / "rgb.txt");
-  if (!list) throw std::runtime_error("cannot write " + (root / "rgb.txt").string());
-  list << "# synthetic room loop: " << params.frames << " frames, " << params.turns << " turns, seed " << params.seed
-       << "\n# timestamp filename\n";
+  std::ofstream rgb_list(root / "rgb.txt"), depth_list(root / "depth.txt");
+  if (!rgb_list) throw std::runtime_error("cannot write " + (root / "rgb.txt").string());
+  if (!depth_list) throw std::runtime_error("cannot write " + (root / "depth.txt").string());
+  rgb_list << "# synthetic room loop: " << params.frames << " frames, " << params.turns << " turns, seed "
+           << params.seed << "\n# timestamp filename\n";
+  depth_list << "# synthetic room loop: camera z in metres times " << params.camera.depth_factor
+             << ", 0 = nothing drawn\n# timestamp filename\n";
   for (size_t k = 0; k < path.size(); ++k) {
     char stamp[32];
     std::snprintf(stamp, sizeof stamp, "%.6f", path[k].timestamp);
-    const std::string name = std::string("rgb/") + stamp + ".png";
-    if (!cv::imwrite((root / name).string(), renderer.render(path[k].T_wc)))
-      throw std::runtime_error("cannot write " + (root / name).string());
-    list << stamp << " " << name << "\n";
+    // The same timestamp for both, so the TUM association pairs every frame exactly.
+    const std::string rgb_name = std::string("rgb/") + stamp + ".png";
+    const std::string depth_name = std::string("depth/") + stamp + ".png";
+    if (!cv::imwrite((root / rgb_name).string(), renderer.render(path[k].T_wc)))
+      throw std::runtime_error("cannot write " + (root / rgb_name).string());
+    const cv::Mat depth = encodeTumDepth(renderer.renderDepth(path[k].T_wc), params.camera.depth_factor);
+    if (!cv::imwrite((root / depth_name).string(), depth))
+      throw std::runtime_error("cannot write " + (root / depth_name).string());
+    rgb_list << stamp << " " << rgb_name << "\n";
+    depth_list << stamp << " " << depth_name << "\n";
     if (progress) progress(static_cast<int>(k + 1), static_cast<int>(path.size()));
   }
-  list.close();
-  if (!list) throw std::runtime_error("cannot write " + (root / "rgb.txt").string());
+  rgb_list.close();
+  if (!rgb_list) throw std::runtime_error("cannot write " + (root / "rgb.txt").string());
+  depth_list.close();
+  if (!depth_list) throw std::runtime_error("cannot write " + (root / "depth.txt").string());
   writeTumTrajectory((root / "groundtruth.txt").string(), path);
 
   const PinholeCamera& c = params.camera;
@@ -233,7 +308,11 @@ void writeRoomLoopSequence(const RoomLoopParams& params, const std::string& fold
   yaml.precision(10);
   yaml << "# The synthetic room's pinhole camera (no distortion).\ncamera:\n"
        << "  name: " << c.name << "\n  width: " << c.width << "\n  height: " << c.height << "\n  fx: " << c.fx
-       << "\n  fy: " << c.fy << "\n  cx: " << c.cx << "\n  cy: " << c.cy << "\n  fps: " << c.fps << "\n";
+       << "\n  fy: " << c.fy << "\n  cx: " << c.cx << "\n  cy: " << c.cy << "\n  fps: " << c.fps << "\n"
+       << "  # depth/*.png: metres times depth_factor. bf = fx times a virtual stereo baseline (m);\n"
+       << "  # depth closer than th_depth baselines counts as close, beyond max_depth_m is dropped.\n"
+       << "  depth_factor: " << c.depth_factor << "\n  bf: " << c.bf << "\n  th_depth: " << c.th_depth
+       << "\n  max_depth_m: " << c.max_depth_m << "\n";
   if (!yaml) throw std::runtime_error("cannot write " + (root / "camera.yaml").string());
 }
 

@@ -16,8 +16,21 @@ struct PinholeCamera {
   double fx = 0, fy = 0, cx = 0, cy = 0;
   double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
   double fps = 30.0;
-  double depth_factor = 5000.0;  // raw depth units per metre (TUM: 5000)
-  double baseline_m = 0.0;        // stereo baseline; 0 for monocular cameras
+  // Depth and stereo (ORB-SLAM2's settings keys in brackets).
+  double depth_factor = 5000.0;  // raw depth units per metre [DepthMapFactor] (TUM: 5000)
+  // fx times the (virtual) stereo baseline in metres [Camera.bf]; 0 for a
+  // monocular camera. RGB-D keypoints get the right-image coordinate
+  // u_R = u - bf / depth a stereo rig of that baseline would have measured.
+  double bf = 0.0;
+  // Points closer than th_depth baselines are "close" [ThDepth]: their depth
+  // is trusted as a stereo measurement (ORB-SLAM2's 40 on TUM).
+  double th_depth = 40.0;
+  // Depth readings beyond this (metres) are dropped: the keypoint stays monocular.
+  double max_depth_m = 10.0;
+
+  double baseline() const { return fx > 0 ? bf / fx : 0.0; }
+  // Depth below which a point counts as close (ORB-SLAM2's mThDepth).
+  double closeDepth() const { return baseline() * th_depth; }
 
   bool hasDistortion() const { return k1 != 0 || k2 != 0 || p1 != 0 || p2 != 0 || k3 != 0; }
   cv::Mat K() const;          // 3x3 CV_64F

@@ -80,8 +80,14 @@ struct DetectorParams {
   std::vector<std::string> dynamic_classes;  // keypoints in these boxes are removed
 };
 
+// What the run feeds the pipeline: colour alone, or colour with registered
+// depth (ORB-SLAM2's RGB-D system). Chosen by `vslam run --mode`, not by the file.
+enum class SensorMode { Monocular, RgbD };
+
 struct Config {
   std::string source;  // file the config was read from ("" for defaults)
+  bool orb_slam_settings = false;  // `source` is an ORB-SLAM2 settings file (keys as Camera.bf)
+  SensorMode sensor = SensorMode::Monocular;
   PinholeCamera camera;
   OrbParams orb;
   InitializerParams initializer;
@@ -96,6 +102,10 @@ struct Config {
 // Throws InputError naming the file (and line where known) for a missing file,
 // a missing required key, or a value of the wrong type.
 Config loadConfig(const std::string& path);
+
+// Checks what RGB-D needs of the camera (bf > 0); throws InputError naming
+// the config file and the key as that file spells it.
+void requireDepthCamera(const Config& config);
 
 // Directory holding the project's config/*.yaml.
 std::string projectConfigDir();

@@ -52,10 +52,15 @@ class Sequence {
   // another size than the camera's.
   cv::Mat loadColor(size_t i) const;        // CV_8UC3 BGR (grey images converted)
   cv::Mat loadGray(size_t i) const;         // CV_8UC1
-  cv::Mat loadDepthMeters(size_t i) const;  // CV_32F metres (0 = no measurement); the file must be 16-bit
+  // CV_32F metres (0 = no measurement); the file must be 16-bit and of the size
+  // of frame i's colour image (`colour_size`), else the error names both files.
+  cv::Mat loadDepthMeters(size_t i, const cv::Size& colour_size) const;
 
  private:
-  cv::Mat readImage(const std::string& path, int imread_flags, int list_line, const char* what) const;
+  // `size_of` non-empty: the image's size is checked by the caller against
+  // that file's, not here against the camera's.
+  cv::Mat readImage(const std::string& path, int imread_flags, int list_line, const char* what,
+                    const std::string& size_of = "") const;
 };
 
 // Thrown by openSequence when a named sequence is in none of the data roots.

@@ -29,6 +29,12 @@ class OsmesaContext {
   // Finishes pending GL work and returns the frame as CV_8UC3 BGR, row 0 at the top.
   cv::Mat readPixels();
 
+  // Finishes pending GL work and returns the depth buffer's window depth (0 at
+  // the near plane, 1 at the far plane or where nothing was drawn) as CV_32F,
+  // row 0 at the top. Only the bottom-left width x height pixels are read, the
+  // area a pass drawn with glViewport(0, 0, width, height) covers.
+  cv::Mat readDepth(int width, int height);
+
  private:
   int width_;
   int height_;

@@ -54,13 +54,27 @@ class RoomLoopRenderer {
   // The view from camera-to-world pose T_wc: CV_8UC3 BGR, camera.width x camera.height.
   cv::Mat render(const SE3& T_wc);
 
+  // The depth of the same view: CV_32F, camera.width x camera.height, each
+  // pixel the camera z (along the optical axis, not the ray's length) in metres
+  // of the surface at that pixel's centre, 0 where nothing was drawn. Drawn at
+  // the camera's own resolution, not averaged down like the colour (an average
+  // across a depth edge is a surface that is not there), so pixel (u, v) of
+  // both images looks along the same ray.
+  cv::Mat renderDepth(const SE3& T_wc);
+
  private:
   struct Scene;
   std::unique_ptr<Scene> scene_;
 };
 
-// Writes a TUM-layout folder: rgb/<timestamp>.png, rgb.txt, groundtruth.txt
-// and camera.yaml (for `vslam run --seq FOLDER --config FOLDER/camera.yaml`).
+// Metric depth (CV_32F, metres) as a TUM depth image: CV_16UC1, value = metres
+// times depth_factor, rounded; 0 where the depth is 0 or beyond 65535 units.
+cv::Mat encodeTumDepth(const cv::Mat& depth_m, double depth_factor);
+
+// Writes a TUM RGB-D folder: rgb/<timestamp>.png, depth/<timestamp>.png (the
+// same timestamps, camera.depth_factor units per metre), rgb.txt, depth.txt,
+// groundtruth.txt and camera.yaml (for `vslam run --seq FOLDER --config
+// FOLDER/camera.yaml`).
 // `progress` is called after each frame with (frames written, total).
 void writeRoomLoopSequence(const RoomLoopParams& params, const std::string& folder,
                            const std::function<void(int, int)>& progress = {});

@@ -70,7 +70,8 @@ class FramePrefetcher {
       try {
         frame.image = sequence_.loadColor(i);
         // A frame without a paired depth image is tracked from colour alone.
-        if (with_depth_ && !sequence_.frames[i].depth_path.empty()) frame.depth = sequence_.loadDepthMeters(i);
+        if (with_depth_ && !sequence_.frames[i].depth_path.empty())
+          frame.depth = sequence_.loadDepthMeters(i, frame.image.size());
       } catch (const std::exception& e) {
         frame.error = e.what();
       }
@@ -205,6 +206,8 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
 
   if (options.deterministic && options.realtime)
     throw InputError("--realtime and --deterministic exclude each other: a live camera does not wait");
+  if ((sequence.config.sensor == SensorMode::RgbD) == mono)
+    throw std::logic_error("runSlam: --mode and the config's sensor disagree");
   SystemOptions system_options;
   system_options.deterministic = options.deterministic;
   system_options.realtime = options.realtime;

@@ -13,6 +13,7 @@ KeyFrame::KeyFrame(long id, const Frame& frame)
       labels(frame.labels),
       colours(frame.colours),
       depth(frame.depth),
+      u_right(frame.u_right),
       grid(frame.grid),
       id_(id),
       frame_id_(frame.id),
@@ -26,6 +27,11 @@ KeyFrame::KeyFrame(long id, const Frame& frame)
     if (i < frame.outlier.size() && frame.outlier[i]) map_points_[i] = nullptr;
 }
 
+Vec3 KeyFrame::unprojectToWorld(size_t i) const {
+  const Vec3 p_c = camera_->unproject(point(i)) * static_cast<double>(depth[i]);
+  return T_cw_.R.transpose() * (p_c - T_cw_.t);
+}
+
 void KeyFrame::eraseMapPoint(MapPoint* point) {
   const int index = point->keypointIn(this);
   if (index >= 0 && map_points_[index] == point) map_points_[index] = nullptr;
@@ -34,7 +40,7 @@ void KeyFrame::eraseMapPoint(MapPoint* point) {
 int KeyFrame::trackedMapPoints(int min_observations) const {
   int count = 0;
   for (MapPoint* point : map_points_)
-    if (point && !point->isBad() && point->observationCount() >= min_observations) ++count;
+    if (point && !point->isBad() && point->observationWeight() >= min_observations) ++count;
   return count;
 }
 

@@ -12,15 +12,29 @@ namespace vslam {
 MapPoint::MapPoint(long id, const Vec3& position_w, KeyFrame* reference, long first_keyframe_id)
     : id_(id), first_keyframe_id_(first_keyframe_id), position_w_(position_w), reference_(reference) {}
 
-void MapPoint::addObservation(KeyFrame* keyframe, int keypoint) { observations_[keyframe] = keypoint; }
+namespace {
+int weightOf(const KeyFrame* keyframe, int keypoint) { return keyframe->hasDepth(keypoint) ? 2 : 1; }
+}  // namespace
+
+void MapPoint::addObservation(KeyFrame* keyframe, int keypoint) {
+  auto [it, inserted] = observations_.try_emplace(keyframe, keypoint);
+  if (!inserted) {
+    observation_weight_ -= weightOf(keyframe, it->second);
+    it->second = keypoint;
+  }
+  observation_weight_ += weightOf(keyframe, keypoint);
+}
 
 void MapPoint::eraseObservation(KeyFrame* keyframe) {
-  if (observations_.erase(keyframe) == 0) return;
+  auto it = observations_.find(keyframe);
+  if (it == observations_.end()) return;
+  observation_weight_ -= weightOf(keyframe, it->second);
+  observations_.erase(it);
   if (reference_ == keyframe && !observations_.empty()) reference_ = observations_.begin()->first;
-  // A point seen from one keyframe only carries no depth information; a
-  // confirmed one must keep the map's minimum of observers.
+  // A point seen from one keyframe without depth carries no depth information;
+  // a confirmed one must keep the map's minimum of observers.
   const int needed = std::max(2, confirmed_min_observations_);
-  if (static_cast<int>(observations_.size()) < needed) setBad();
+  if (observation_weight_ < needed) setBad();
 }
 
 int MapPoint::keypointIn(const KeyFrame* keyframe) const {
@@ -33,6 +47,7 @@ void MapPoint::setBad() {
   bad_ = true;
   for (auto& [keyframe, index] : observations_) keyframe->setMapPoint(index, nullptr);
   observations_.clear();
+  observation_weight_ = 0;
 }
 
 void MapPoint::replaceWith(MapPoint* other) {
@@ -48,6 +63,7 @@ void MapPoint::replaceWith(MapPoint* other) {
   other->increaseFound(found_);
   other->increaseVisible(visible_);
   observations_.clear();
+  observation_weight_ = 0;
   bad_ = true;
   replaced_by_ = other;
   other->updateDescriptor();

@@ -1,6 +1,7 @@
 #include "vslam/slam/frame_builder.hpp"
 
 #include <chrono>
+#include <cmath>
 
 #include <opencv2/imgproc.hpp>
 
@@ -14,6 +15,28 @@ FrameBuilder::FrameBuilder(const Config& config, const PinholeCamera& camera, st
   pyramid_.sigma2 = extractor_.levelSigma2();
   pyramid_.inv_sigma2 = extractor_.invLevelSigma2();
   undistorted_bounds_ = undistortedImageBounds(camera_);
+}
+
+void FrameBuilder::sampleDepth(const cv::Mat& depth_m, const std::vector<cv::Point2f>& detected, Frame& frame) const {
+  const size_t n = detected.size();
+  frame.depth.assign(n, -1.0f);
+  frame.u_right.assign(n, -1.0f);
+  const double bf = camera_.bf;
+  for (size_t i = 0; i < n; ++i) {
+    // The depth image is registered to the colour image as captured, so the
+    // keypoint's depth is read where it was detected; u_R is computed from
+    // its undistorted u, the coordinate the optimisers work in.
+    const int row = cvRound(detected[i].y), col = cvRound(detected[i].x);
+    if (row < 0 || col < 0 || row >= depth_m.rows || col >= depth_m.cols) continue;
+    const float d = depth_m.at<float>(row, col);
+    if (!(d > 0.0f) || !std::isfinite(d) || d > camera_.max_depth_m) continue;  // no reading: monocular
+    const double u_r = frame.points[i].x - bf / d;
+    // The optimisers read u_R < 0 as "monocular"; only a point closer than
+    // bf/u to the left border can fall there, and it stays monocular.
+    if (u_r < 0) continue;
+    frame.depth[i] = d;
+    frame.u_right[i] = static_cast<float>(u_r);
+  }
 }
 
 Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m,
@@ -61,11 +84,7 @@ Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& b
     else
       frame.colours[i] = cv::Vec3b::all(gray.at<uint8_t>(p));
   }
-  if (!depth_m.empty()) {
-    frame.depth.resize(distorted.size());
-    for (size_t i = 0; i < distorted.size(); ++i)
-      frame.depth[i] = depth_m.at<float>(cvRound(distorted[i].y), cvRound(distorted[i].x));
-  }
+  if (!depth_m.empty()) sampleDepth(depth_m, distorted, frame);
   frame.finalizeFeatures(undistorted_bounds_);
   return frame;
 }

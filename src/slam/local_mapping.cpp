@@ -1,6 +1,7 @@
 #include "vslam/slam/local_mapping.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <set>
 #include <string>
@@ -10,6 +11,7 @@
 #include "vslam/core/error.hpp"
 #include "vslam/geometry/triangulation.hpp"
 #include "vslam/optimize/bundle_adjuster.hpp"
+#include "vslam/optimize/reprojection.hpp"
 #include "vslam/place/keyframe_database.hpp"
 #include "vslam/place/vocabulary.hpp"
 #include "vslam/slam/loop_closing.hpp"
@@ -18,7 +20,8 @@
 namespace vslam {
 namespace {
 
-constexpr size_t kTriangulationNeighbours = 20;  // monocular, as ORB-SLAM
+constexpr size_t kTriangulationNeighbours = 20;       // monocular, as ORB-SLAM
+constexpr size_t kTriangulationNeighboursDepth = 10;  // RGB-D, as ORB-SLAM2
 constexpr size_t kFuseNeighbours = 20;
 constexpr size_t kFuseSecondNeighbours = 5;
 constexpr double kMinParallaxCos = 0.9998;
@@ -43,7 +46,7 @@ void LocalMapping::maybeRecordBundleProblem(const PinholeCamera& camera, const B
     if (!keyframe.fixed) ++free_keyframes;
   if (free_keyframes < record_ba_min_keyframes_) return;
   try {
-    saveBundleProblem(record_ba_path_, camera, 0.0, problem);
+    saveBundleProblem(record_ba_path_, camera, camera.bf, problem);
     spdlog::info("recorded a local BA problem ({} keyframes, {} free, {} points, {} observations) in {}",
                  problem.keyframes.size(), free_keyframes, problem.points.size(), problem.observations.size(),
                  record_ba_path_);
@@ -231,7 +234,8 @@ void LocalMapping::processKeyFrame(KeyFrame* keyframe) {
   if (queueEmpty() && enough_keyframes) {
     localBundleAdjustment(keyframe);
     std::lock_guard<std::mutex> lock(map_.mutex());
-    for (KeyFrame* culled : cullRedundantKeyFrames(keyframe, config_.mapping.redundant_keyframe_ratio)) {
+    for (KeyFrame* culled : cullRedundantKeyFrames(keyframe, config_.mapping.redundant_keyframe_ratio,
+                                                            config_.sensor == SensorMode::RgbD)) {
       if (database_) database_->erase(culled->id());
       ++culled_keyframes_;
     }
@@ -278,7 +282,7 @@ void LocalMapping::cullRecentMapPoints(KeyFrame* keyframe) {
     } else if (point->foundRatio() < config_.mapping.min_found_ratio) {
       point->setBad();
       it = recent_points_.erase(it);
-    } else if (age >= 2 && point->observationCount() < min_observations) {
+    } else if (age >= 2 && point->observationWeight() < min_observations) {
       // The paper's rule: a point must be seen in at least 3 keyframes.
       point->setBad();
       it = recent_points_.erase(it);
@@ -300,10 +304,16 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
   const double ratio_factor = 1.5 * pyramid.scale_factor;
   int created = 0;
 
-  for (KeyFrame* neighbour : keyframe->bestCovisibles(kTriangulationNeighbours)) {
+  const bool rgbd = config_.sensor == SensorMode::RgbD;
+  const double bf = camera.bf;
+  const double baseline = camera.baseline();
+  // ORB-SLAM2 triangulates with 10 neighbours when depth is measured, 20 when not.
+  const size_t neighbours = rgbd ? kTriangulationNeighboursDepth : kTriangulationNeighbours;
+  for (KeyFrame* neighbour : keyframe->bestCovisibles(neighbours)) {
     const Vec3 C2 = neighbour->cameraCentre();
-    // Too short a baseline for the scene depth gives unreliable depth.
-    if ((C2 - C1).norm() / neighbour->medianSceneDepth() < 0.01) continue;
+    // Too short a baseline for the scene depth gives unreliable depth; with
+    // depth, a motion shorter than the virtual stereo baseline adds nothing.
+    if (rgbd ? (C2 - C1).norm() < baseline : (C2 - C1).norm() / neighbour->medianSceneDepth() < 0.01) continue;
     const std::vector<std::pair<int, int>> matches = searchForTriangulation(*keyframe, *neighbour);
     const SE3& T2 = neighbour->pose();
     Eigen::Matrix<double, 3, 4> P1, P2;
@@ -317,16 +327,37 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
       const Vec3 ray1 = T1.R.transpose() * xn1;
       const Vec3 ray2 = T2.R.transpose() * xn2;
       const double parallax_cos = ray1.dot(ray2) / (ray1.norm() * ray2.norm());
-      if (parallax_cos <= 0 || parallax_cos >= kMinParallaxCos) continue;
+      // The parallax a keypoint's depth gives on its own: the angle its
+      // virtual stereo pair subtends (cos 2 > any ray parallax: no depth).
+      const bool depth1 = keyframe->hasDepth(i1), depth2 = neighbour->hasDepth(i2);
+      const double stereo_cos1 = depth1 ? std::cos(2 * std::atan2(baseline / 2, keyframe->depth[i1])) : 2.0;
+      const double stereo_cos2 = depth2 ? std::cos(2 * std::atan2(baseline / 2, neighbour->depth[i2])) : 2.0;
+      const double stereo_cos = std::min(stereo_cos1, stereo_cos2);
       Vec3 X;
-      if (!triangulateDlt(P1, P2, xn1.head<2>(), xn2.head<2>(), X)) continue;
+      if (parallax_cos > 0 && parallax_cos < stereo_cos && (depth1 || depth2 || parallax_cos < kMinParallaxCos)) {
+        // The two rays see the point from further apart than any depth reading does.
+        if (!triangulateDlt(P1, P2, xn1.head<2>(), xn2.head<2>(), X)) continue;
+      } else if (depth1 && stereo_cos1 < stereo_cos2) {
+        X = keyframe->unprojectToWorld(i1);
+      } else if (depth2 && stereo_cos2 < stereo_cos1) {
+        X = neighbour->unprojectToWorld(i2);
+      } else {
+        continue;  // no parallax
+      }
       const Vec3 p1 = T1 * X, p2 = T2 * X;
       if (p1.z() <= 0 || p2.z() <= 0) continue;
-      // Reprojection within the 95 % chi-square bound at each keypoint's scale.
-      if ((camera.project(p1) - keyframe->point(i1)).squaredNorm() > 5.991 * pyramid.sigma2[kp1.octave]) continue;
-      if ((neighbour->camera().project(p2) - neighbour->point(i2)).squaredNorm() >
-          5.991 * pyramid.sigma2[kp2.octave])
-        continue;
+      // Reprojection within the 95 % chi-square bound at each keypoint's scale
+      // (3 dof with the right coordinate where the keypoint has depth).
+      auto reprojects = [&](const KeyFrame& kf, int i, const Vec3& p_c, bool with_depth) {
+        const Vec2 px = kf.camera().project(p_c);
+        double e2 = (px - kf.point(i)).squaredNorm();
+        if (with_depth) {
+          const double right_error = px.x() - bf / p_c.z() - kf.u_right[i];
+          e2 += right_error * right_error;
+        }
+        return e2 <= (with_depth ? kChi2Stereo : kChi2Mono) * pyramid.sigma2[kf.keypoints[i].octave];
+      };
+      if (!reprojects(*keyframe, i1, p1, depth1) || !reprojects(*neighbour, i2, p2, depth2)) continue;
       // The distance ratio must agree with the pyramid levels the point was seen at.
       const double dist1 = (X - C1).norm(), dist2 = (X - C2).norm();
       if (dist1 <= 0 || dist2 <= 0) continue;
@@ -439,7 +470,8 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
         auto it = slot.find(kf);
         if (it == slot.end()) continue;
         problem.observations.push_back({it->second, static_cast<int>(p), kf->point(index),
-                                        pyramid.inv_sigma2[kf->keypoints[index].octave]});
+                                        pyramid.inv_sigma2[kf->keypoints[index].octave],
+                                        kf->rightCoordinate(index)});
       }
     }
   }
@@ -449,7 +481,7 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
   options.iterations_second = config_.mapping.local_ba_iterations;
   options.abort_flag = &abort_ba_;
   if (!record_ba_path_.empty()) maybeRecordBundleProblem(keyframe->camera(), problem);
-  const BundleResult result = bundleAdjust(keyframe->camera(), 0.0, problem, options);
+  const BundleResult result = bundleAdjust(keyframe->camera(), keyframe->camera().bf, problem, options);
   ++local_ba_count_;
 
   std::lock_guard<std::mutex> lock(map_.mutex());
@@ -470,7 +502,7 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
   }
 }
 
-std::vector<KeyFrame*> cullRedundantKeyFrames(KeyFrame* keyframe, double redundant_ratio) {
+std::vector<KeyFrame*> cullRedundantKeyFrames(KeyFrame* keyframe, double redundant_ratio, bool close_points_only) {
   constexpr int kObserversNeeded = 3;
   std::vector<KeyFrame*> culled;
   // A copy: culling a neighbour erases it from this keyframe's covisibility list.
@@ -481,6 +513,10 @@ std::vector<KeyFrame*> cullRedundantKeyFrames(KeyFrame* keyframe, double redunda
     for (size_t i = 0; i < candidate->size(); ++i) {
       MapPoint* point = candidate->mapPoint(i);
       if (!point || point->isBad()) continue;
+      // RGB-D, as ORB-SLAM2: a keyframe is judged by its close points, the ones its depth fixes.
+      if (close_points_only &&
+          (!candidate->hasDepth(i) || candidate->depth[i] > candidate->camera().closeDepth()))
+        continue;
       ++with_points;
       if (point->observationCount() <= kObserversNeeded) continue;
       const int level = candidate->keypoints[i].octave;

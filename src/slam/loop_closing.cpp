@@ -100,14 +100,17 @@ FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations,
     }
     for (MapPoint* point : map.mapPoints()) {
       const size_t first_observation = problem.observations.size();
+      int weight = 0;
       for (const auto& [kf, index] : point->observations()) {
         auto it = slot.find(kf);
         if (it == slot.end()) continue;
         problem.observations.push_back({it->second, static_cast<int>(points.size()), kf->point(index),
-                                        kf->pyramid().inv_sigma2[kf->keypoints[index].octave]});
+                                        kf->pyramid().inv_sigma2[kf->keypoints[index].octave],
+                                        kf->rightCoordinate(index)});
+        weight += kf->hasDepth(index) ? 2 : 1;
       }
-      // Points seen only once would be unconstrained along their ray.
-      if (problem.observations.size() - first_observation < 2) {
+      // Points seen only once without depth would be unconstrained along their ray.
+      if (weight < 2) {
         problem.observations.resize(first_observation);
         continue;
       }
@@ -120,7 +123,7 @@ FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations,
   options.iterations_second = 0;
   options.remove_outliers = false;
   options.abort_flag = control.abort;
-  const BundleResult result = bundleAdjust(*camera, 0.0, problem, options);
+  const BundleResult result = bundleAdjust(*camera, camera->bf, problem, options);
   summary.keyframes = static_cast<int>(keyframes.size());
   summary.points = static_cast<int>(points.size());
   summary.initial_cost = result.initial_cost;
@@ -485,6 +488,9 @@ bool LoopClosing::computeSim3(KeyFrame* current, const std::vector<KeyFrame*>& c
     Sim3SolverParams ransac_params;
     ransac_params.iterations = kRansacIterations;
     ransac_params.min_inliers = kMinRansacInliers;
+    // With depth the map is metric and a loop corrects a rigid motion: SE(3), scale fixed at 1.
+    const bool fix_scale = config_.sensor == SensorMode::RgbD;
+    ransac_params.fix_scale = fix_scale;
     const Mat3 K = camera.Keigen();
     const Sim3Result ransac =
         solveSim3Ransac(correspondences, K, K, ransac_params, static_cast<uint32_t>(current->id()));
@@ -498,7 +504,9 @@ bool LoopClosing::computeSim3(KeyFrame* current, const std::vector<KeyFrame*>& c
     for (size_t k = 0; k < pairs.size(); ++k)
       if (mask[k]) inlier_pairs.push_back(pairs[k]);
     Sim3 S12 = best;
-    const Sim3OptimizationResult refined = optimizeSim3(camera, inlier_pairs, S12);
+    Sim3OptimizationOptions refine_options;
+    refine_options.fix_scale = fix_scale;
+    const Sim3OptimizationResult refined = optimizeSim3(camera, inlier_pairs, S12, refine_options);
     if (refined.n_inliers < kMinRansacInliers) continue;
 
     std::vector<MapPoint*> loop_points;
@@ -646,6 +654,7 @@ bool LoopClosing::correctLoop(KeyFrame* current, LoopCandidate& loop) {
   }
   PoseGraphOptions options;
   options.iterations = kPoseGraphIterations;
+  options.fix_scale = config_.sensor == SensorMode::RgbD;  // an SE(3) essential graph for a metric map
   optimizeSim3PoseGraph(vertices, edges, options);
 
   // Write back: poses, then points through the keyframe that last moved them.

@@ -94,8 +94,9 @@ bool System::processFrame(int index, double timestamp, const cv::Mat& image, con
   {
     ScopedStage stage(&timer_, "extract");
     // Monocular initialisation matches only the finest level: extract twice the
-    // features until the map exists, as ORB-SLAM does.
-    const bool initialising = tracking_->state() == TrackingState::NotInitialized;
+    // features until the map exists, as ORB-SLAM does (RGB-D needs one frame).
+    const bool initialising =
+        tracking_->state() == TrackingState::NotInitialized && config_.sensor == SensorMode::Monocular;
     const int n_features = initialising ? 2 * config_.orb.n_features : -1;
     frame = frame_builder_->build(next_frame_id_++, index, timestamp, image, depth_m, n_features,
                                   detection_ ? &detections : nullptr, &filter);
@@ -106,6 +107,7 @@ bool System::processFrame(int index, double timestamp, const cv::Mat& image, con
     keypoints_removed_.push_back(filter.stats.keypoints_removed_dynamic);
     boxes_used_.push_back(filter.stats.boxes_used);
   }
+  if (config_.sensor == SensorMode::RgbD && !frame.hasDepthImage()) ++frames_without_depth_;
   bool tracked;
   {
     ScopedStage stage(&timer_, "track");
@@ -201,6 +203,7 @@ SystemStats System::stats() const {
   stats.relocalisations = tracking_->relocalisations();
   stats.map_resets = tracking_->mapResets();
   stats.keyframe_waits = tracking_->keyframeWaits();
+  stats.frames_without_depth = frames_without_depth_;
   if (loop_closing_) stats.implausible_loops_rejected = loop_closing_->implausibleLoopsRejected();
   return stats;
 }

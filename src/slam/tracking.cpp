@@ -22,6 +22,10 @@ namespace vslam {
 namespace {
 
 constexpr int kInitMinKeypoints = 100;
+constexpr int kInitMinKeypointsWithDepth = 500;  // ORB-SLAM2's RGB-D initialisation
+constexpr int kCloseTrackedFew = 100;             // ORB-SLAM2's close-point keyframe rule...
+constexpr int kCloseUntrackedMany = 70;           // ...tracked < 100 and untracked > 70
+constexpr int kNewKeyFrameMinDepthPoints = 100;   // a keyframe adds depth points up to at least this many
 constexpr int kInitMinMatches = 100;
 constexpr double kInitWindowPx = 100.0;
 constexpr double kProjectionRadiusPx = 15.0;  // monocular search window around the predicted position
@@ -157,6 +161,10 @@ bool Tracking::track(Frame& frame) {
 }
 
 void Tracking::initialise(Frame& frame) {
+  if (config_.sensor == SensorMode::RgbD) {
+    initialiseFromDepth(frame);
+    return;
+  }
   if (!init_reference_) {
     if (static_cast<int>(frame.size()) > kInitMinKeypoints) {
       init_reference_ = std::make_unique<Frame>(frame);
@@ -293,6 +301,56 @@ void Tracking::initialise(Frame& frame) {
   init_reference_.reset();
 }
 
+void Tracking::initialiseFromDepth(Frame& frame) {
+  // ORB-SLAM2's RGB-D initialisation: one frame with enough depth readings
+  // becomes the first keyframe, at the world origin, and every keypoint with
+  // depth becomes a map point. The map is metric from the start.
+  int with_depth = 0;
+  for (size_t i = 0; i < frame.size(); ++i)
+    if (frame.hasDepth(i)) ++with_depth;
+  if (with_depth < kInitMinKeypointsWithDepth) {
+    spdlog::debug("frame {}: {} keypoints with depth, {} needed to initialise", frame.index, with_depth,
+                  kInitMinKeypointsWithDepth);
+    return;
+  }
+  std::lock_guard<std::mutex> lock(map_.mutex());
+  frame.T_cw = SE3();
+  frame.has_pose = true;
+  frame.map_points.assign(frame.size(), nullptr);
+  frame.outlier.assign(frame.size(), false);
+  KeyFrame* keyframe = map_.createKeyFrame(frame);
+  std::vector<MapPoint*> points;
+  for (size_t i = 0; i < keyframe->size(); ++i) {
+    if (!keyframe->hasDepth(i)) continue;
+    points.push_back(createPointFromDepth(keyframe, i));
+    frame.map_points[i] = points.back();
+  }
+  spdlog::info("map initialised at frame {} from depth with {} points", frame.index, points.size());
+  local_mapping_.insertKeyFrame(keyframe);
+  last_frame_ = frame;
+  last_frame_->has_pose = true;
+  velocity_.reset();
+  reference_keyframe_ = keyframe;
+  last_keyframe_ = keyframe;
+  last_keyframe_frame_id_ = frame.id;
+  local_keyframes_ = {keyframe};
+  local_points_ = points;
+  keyframes_created_ = 1;
+  initialised_at_index_ = frame.index;
+  state_ = TrackingState::Ok;
+}
+
+MapPoint* Tracking::createPointFromDepth(KeyFrame* keyframe, size_t keypoint) {
+  MapPoint* point = map_.createMapPoint(keyframe->unprojectToWorld(keypoint), keyframe);
+  point->addObservation(keyframe, static_cast<int>(keypoint));
+  keyframe->setMapPoint(keypoint, point);
+  point->setColour(keyframe->colours[keypoint]);
+  point->updateDescriptor();
+  point->updateNormalAndDepth(keyframe->pyramid());
+  point->updateClass();
+  return point;
+}
+
 int Tracking::optimisePose(Frame& frame) {
   std::vector<Vec3> points_w;
   std::vector<Observation2D> observations;
@@ -301,13 +359,15 @@ int Tracking::optimisePose(Frame& frame) {
     MapPoint* point = frame.map_points[i];
     if (!point) continue;
     keypoint_of.push_back(static_cast<int>(i));
+    // Keypoints with depth add the right coordinate: (u, v, u_R), 3-DOF chi-square.
     observations.push_back({static_cast<int>(points_w.size()), frame.point(i),
-                            frame.pyramid->inv_sigma2[frame.keypoints[i].octave]});
+                            frame.pyramid->inv_sigma2[frame.keypoints[i].octave], frame.rightCoordinate(i)});
     points_w.push_back(point->position());
   }
   frame.outlier.assign(frame.size(), false);
   if (observations.size() < 3) return 0;
-  const PoseOptimizationResult result = optimizePose(*frame.camera, 0.0, frame.T_cw, points_w, observations);
+  const PoseOptimizationResult result =
+      optimizePose(*frame.camera, frame.camera->bf, frame.T_cw, points_w, observations);
   frame.T_cw = result.T_cw;
   frame.has_pose = true;
   for (size_t k = 0; k < keypoint_of.size(); ++k)
@@ -514,9 +574,13 @@ bool Tracking::needNewKeyFrame(const Frame& frame) const {
 
   // The paper's rule: at least 20 frames since the last keyframe or fewer than
   // 100 tracked points, and fewer than 90 % of the reference keyframe's points tracked.
+  // RGB-D adds ORB-SLAM2's close-point rule: few close points tracked while
+  // many close ones could be added means the map is thinning where depth is best.
+  const bool need_close_points = needCloseKeyFrame(frame);
   const bool enough_time_or_weak = frames_since >= params.max_frames_between_keyframes ||
-                                   matches_inliers_ < params.min_tracked_points;
-  const bool new_content = matches_inliers_ < params.ref_ratio * reference_points && matches_inliers_ > 15;
+                                   matches_inliers_ < params.min_tracked_points || need_close_points;
+  const bool new_content =
+      (matches_inliers_ < params.ref_ratio * reference_points || need_close_points) && matches_inliers_ > 15;
   if (!(enough_time_or_weak && new_content)) return false;
   // Local Mapping must be ready to take it; otherwise ask it to wrap up its BA.
   if (local_mapping_.acceptsKeyFrames()) return true;
@@ -528,10 +592,50 @@ bool Tracking::needNewKeyFrame(const Frame& frame) const {
   return matches_inliers_ < params.min_tracked_points && local_mapping_.queuedKeyFrames() < 1;
 }
 
+bool Tracking::needCloseKeyFrame(const Frame& frame) const {
+  if (config_.sensor != SensorMode::RgbD || !frame.hasDepthImage()) return false;
+  const double close_depth = frame.camera->closeDepth();
+  int tracked_close = 0, untracked_close = 0;
+  for (size_t i = 0; i < frame.size(); ++i) {
+    if (!frame.hasDepth(i) || frame.depth[i] >= close_depth) continue;
+    if (frame.map_points[i] && !frame.outlier[i])
+      ++tracked_close;
+    else
+      ++untracked_close;
+  }
+  return tracked_close < kCloseTrackedFew && untracked_close > kCloseUntrackedMany;
+}
+
+void Tracking::addCloseDepthPoints(KeyFrame* keyframe, Frame& frame) {
+  // ORB-SLAM2: the keypoints with depth, nearest first; every one without a
+  // point becomes one, until past the close depth with at least 100 points
+  // counted (tracked ones included).
+  std::vector<std::pair<float, size_t>> by_depth;
+  for (size_t i = 0; i < keyframe->size(); ++i)
+    if (keyframe->hasDepth(i)) by_depth.emplace_back(keyframe->depth[i], i);
+  std::sort(by_depth.begin(), by_depth.end());
+  const double close_depth = keyframe->camera().closeDepth();
+  int counted = 0, created = 0;
+  for (const auto& [depth, i] : by_depth) {
+    MapPoint* existing = keyframe->mapPoint(i);
+    if (!existing || existing->isBad()) {
+      // The frame tracks it too, so the next frame's motion model finds it.
+      frame.map_points[i] = createPointFromDepth(keyframe, i);
+      frame.outlier[i] = false;
+      ++created;
+    }
+    ++counted;
+    if (depth > close_depth && counted > kNewKeyFrameMinDepthPoints) break;
+  }
+  spdlog::debug("keyframe {}: {} points from depth", keyframe->id(), created);
+}
+
 void Tracking::createKeyFrame(Frame& frame) {
   last_keyframe_was_weak_ = matches_inliers_ < config_.tracking.min_tracked_points;
   KeyFrame* keyframe = map_.createKeyFrame(frame);
   keyframe->setFallbackParent(reference_keyframe_);
+  if (config_.sensor == SensorMode::RgbD && frame.hasDepthImage())
+    addCloseDepthPoints(keyframe, frame);
   reference_keyframe_ = keyframe;
   last_keyframe_ = keyframe;
   last_keyframe_frame_id_ = frame.id;

@@ -43,7 +43,12 @@ struct Frame {
   cv::Mat descriptors;                  // N x 32, CV_8U
   std::vector<FeatureLabel> labels;     // one per keypoint
   std::vector<cv::Vec3b> colours;       // BGR at each keypoint
-  std::vector<float> depth;             // metres per keypoint (RGB-D), <= 0 none; empty in mono
+  // RGB-D: per keypoint the depth (metres) and the right-image coordinate
+  // u_R = u - bf / depth of a virtual stereo pair; both < 0 where the depth
+  // image has no valid reading (a monocular keypoint). Empty for a frame
+  // without a depth image.
+  std::vector<float> depth;
+  std::vector<float> u_right;
   FeatureGrid grid;                     // spatial index of `points`
 
   // Tracking state.
@@ -60,6 +65,10 @@ struct Frame {
   void finalizeFeatures(const cv::Rect2f& bounds);
   FeatureView view() const { return {keypoints, points, descriptors}; }
   Vec2 point(size_t i) const { return Vec2(points[i].x, points[i].y); }
+  bool hasDepth(size_t i) const { return i < depth.size() && depth[i] > 0; }
+  // The optimisers' right coordinate: u_R, or -1 for a monocular keypoint.
+  double rightCoordinate(size_t i) const { return hasDepth(i) ? u_right[i] : -1.0; }
+  bool hasDepthImage() const { return !depth.empty(); }
   int trackedCount() const;  // matched, non-outlier keypoints
 };
 

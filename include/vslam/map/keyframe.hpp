@@ -36,10 +36,15 @@ class KeyFrame {
   cv::Mat descriptors;
   std::vector<FeatureLabel> labels;
   std::vector<cv::Vec3b> colours;
-  std::vector<float> depth;
+  std::vector<float> depth;    // RGB-D, as Frame::depth
+  std::vector<float> u_right;  // RGB-D, as Frame::u_right
   FeatureGrid grid;
   FeatureView view() const { return {keypoints, points, descriptors}; }
   Vec2 point(size_t i) const { return Vec2(points[i].x, points[i].y); }
+  bool hasDepth(size_t i) const { return i < depth.size() && depth[i] > 0; }
+  double rightCoordinate(size_t i) const { return hasDepth(i) ? u_right[i] : -1.0; }
+  // The keypoint's 3D point from its depth, in world coordinates (hasDepth(i)).
+  Vec3 unprojectToWorld(size_t i) const;
   // Bag of words and direct index, set once by Local Mapping when it takes the
   // keyframe (empty without a vocabulary); read-only afterwards.
   BowVector bow;

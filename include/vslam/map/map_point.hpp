@@ -28,9 +28,13 @@ class MapPoint {
   // Observations: keyframe -> keypoint index.
   const KeyFrameMap<int>& observations() const { return observations_; }
   int observationCount() const { return static_cast<int>(observations_.size()); }
+  // Observations as ORB-SLAM2 counts them for its survival rules: one with
+  // depth (RGB-D) counts twice, as a stereo pair fixes the point in 3D on its
+  // own. Equals observationCount() in monocular runs.
+  int observationWeight() const { return observation_weight_; }
   void addObservation(KeyFrame* keyframe, int keypoint);
-  // Removes one observation; the point turns bad when fewer than 2 remain, or,
-  // once it has passed its probation (confirm()), fewer than the map's minimum
+  // Removes one observation; the point turns bad when a weight below 2 remains,
+  // or, once it has passed its probation (confirm()), below the map's minimum
   // (the paper: a map point lives only while seen in at least 3 keyframes).
   void eraseObservation(KeyFrame* keyframe);
   // Called by Local Mapping when the point survives its probation.
@@ -81,6 +85,7 @@ class MapPoint {
   long first_keyframe_id_;
   Vec3 position_w_;
   KeyFrameMap<int> observations_;
+  int observation_weight_ = 0;
   KeyFrame* reference_;
   cv::Mat descriptor_;
   Vec3 normal_ = Vec3::Zero();

@@ -24,8 +24,8 @@ class FrameBuilder {
   // `dynamic_class_ids`: classes whose boxes remove keypoints (DetectionStage::dynamicClassIds()).
   FrameBuilder(const Config& config, const PinholeCamera& camera, std::vector<int> dynamic_class_ids = {});
 
-  // `bgr` is the colour image (or grey, CV_8UC1); `depth_m` is CV_32F metres or
-  // empty; `n_features` < 0 means the configured number. With `detections`,
+  // `bgr` is the colour image (or grey, CV_8UC1); `depth_m` is CV_32F metres,
+  // registered to it and of its size, or empty (no depth: a monocular frame); `n_features` < 0 means the configured number. With `detections`,
   // the keypoint filter (Algorithm 1) runs on the frame's own pyramid and its
   // outcome goes to `filter` (when given); without, no keypoint is labelled.
   Frame build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m = cv::Mat(),
@@ -37,6 +37,9 @@ class FrameBuilder {
   const OrbExtractor& extractor() const { return extractor_; }
 
  private:
+  // Depth and u_R per keypoint from a depth image (CV_32F metres) of the colour image's size.
+  void sampleDepth(const cv::Mat& depth_m, const std::vector<cv::Point2f>& detected, Frame& frame) const;
+
   Config config_;
   PinholeCamera camera_;
   OrbExtractor extractor_;

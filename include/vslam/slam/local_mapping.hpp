@@ -28,7 +28,9 @@ class LoopClosing;
 // `redundant_ratio` of their points are seen by at least three other keyframes
 // at the same or a finer scale. Returns the keyframes culled (set bad), in the
 // order they were examined. Caller holds the map lock.
-std::vector<KeyFrame*> cullRedundantKeyFrames(KeyFrame* keyframe, double redundant_ratio);
+// `close_points_only` (RGB-D): only keypoints with depth below the close depth count.
+std::vector<KeyFrame*> cullRedundantKeyFrames(KeyFrame* keyframe, double redundant_ratio,
+                                              bool close_points_only = false);
 
 class LocalMapping {
  public:

@@ -66,6 +66,7 @@ struct SystemStats {
   int map_resets = 0;       // maps thrown away after losing tracking right after initialisation
   int keyframe_waits = 0;   // keyframes that waited for Local Mapping (back-pressure)
   int implausible_loops_rejected = 0;
+  int frames_without_depth = 0;  // RGB-D: frames without a paired depth image, tracked as monocular
 };
 
 // The detector's part of a run, for report.json's "detector".
@@ -138,6 +139,7 @@ class System {
   std::unique_ptr<LoopClosing> loop_closing_;
   std::vector<StampedPose> frames_before_final_ba_, keyframes_before_final_ba_;
   long next_frame_id_ = 0;
+  int frames_without_depth_ = 0;
   bool finished_ = false;
   std::set<int> detection_submitted_;  // frames submitted to detection and not yet waited for
   // Keypoint filter outcome per frame (Tracking's thread only).

@@ -73,6 +73,11 @@ class Tracking {
 
  private:
   void initialise(Frame& frame);
+  void initialiseFromDepth(Frame& frame);  // RGB-D: one frame, metric map
+  // A map point at keypoint `keypoint`'s depth, observed by `keyframe` (map lock held).
+  MapPoint* createPointFromDepth(KeyFrame* keyframe, size_t keypoint);
+  bool needCloseKeyFrame(const Frame& frame) const;
+  void addCloseDepthPoints(KeyFrame* keyframe, Frame& frame);
   bool trackWithMotionModel(Frame& frame);
   bool trackReferenceKeyFrame(Frame& frame);
   bool trackLocalMap(Frame& frame);

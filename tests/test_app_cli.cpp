@@ -110,6 +110,47 @@ TEST(CliRun, RealtimePlaysAtTheTimestampsAndCountsDroppedFrames) {
   EXPECT_TRUE(contains(both.err, "--realtime and --deterministic")) << both.err;
 }
 
+// RGB-D is scored as the metric map it is: SE(3) alignment, with the scale a
+// Sim(3) alignment would find beside it; a monocular run only ever by Sim(3).
+TEST(CliRun, RgbdReportsSe3AteWithTheSim3ScaleAndMonoOnlySim3) {
+  const fs::path dir = test::scratchDir("cli_run_rgbd");
+  const Outcome rgbd = vslam("run --seq tum/fr3_teddy --max-frames 100 --mode rgbd --detector none --no-render --out " +
+                             quoted((dir / "rgbd").string()));
+  ASSERT_EQ(rgbd.exit_code, 0) << rgbd.err;
+  EXPECT_TRUE(contains(rgbd.out, "SE(3) alignment; Sim(3) would scale by")) << rgbd.out;
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir / "rgbd" / "report.json"));
+  EXPECT_EQ(report["mode"], "rgbd");
+  EXPECT_EQ(report["frames_without_depth"], 0);
+  EXPECT_EQ(report["initialised_at_frame"], 0);  // one frame with depth is enough
+  for (const char* part : {"keyframes", "frames"}) {
+    const nlohmann::json& ate = report["ate"][part];
+    EXPECT_EQ(ate["alignment"], "se3") << part;
+    EXPECT_EQ(ate["scale"], 1.0) << part;
+    EXPECT_NEAR(ate["sim3_scale"].get<double>(), 1.0, 0.05) << part;
+    EXPECT_LT(ate["rmse_m"].get<double>(), 0.03) << part;
+  }
+
+  const Outcome mono = vslam("run --seq tum/fr3_teddy --max-frames 100 --detector none --no-render --out " +
+                             quoted((dir / "mono").string()));
+  ASSERT_EQ(mono.exit_code, 0) << mono.err;
+  const nlohmann::json mono_report = nlohmann::json::parse(slurp(dir / "mono" / "report.json"));
+  EXPECT_EQ(mono_report["ate"]["keyframes"]["alignment"], "sim3");
+  EXPECT_FALSE(mono_report["ate"]["keyframes"].contains("sim3_scale"));
+  EXPECT_FALSE(mono_report.contains("frames_without_depth"));
+}
+
+TEST(CliRun, RgbdWithoutCameraBfExitsTwoNamingTheKey) {
+  const fs::path dir = test::scratchDir("cli_run_rgbd_nobf");
+  const fs::path settings = dir / "TUM3.yaml";
+  std::ofstream(settings) << "%YAML:1.0\nCamera.fx: 535.4\nCamera.fy: 539.2\nCamera.cx: 320.1\nCamera.cy: 247.6\n";
+  const Outcome run = vslam("run --seq tum/fr3_teddy --max-frames 5 --mode rgbd --config " + quoted(settings.string()) +
+                            " --out " + quoted((dir / "run").string()));
+  EXPECT_EQ(run.exit_code, 2);
+  const std::vector<std::string> lines = errorLines(run.err);
+  ASSERT_EQ(lines.size(), 1u) << run.err;
+  EXPECT_TRUE(contains(lines[0], settings.string() + ": missing required key 'Camera.bf' for RGB-D")) << lines[0];
+}
+
 TEST(CliRun, HelpListsEveryOptionAndItsDefault) {
   const Outcome help = vslam("run --help");
   EXPECT_EQ(help.exit_code, 0);

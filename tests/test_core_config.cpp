@@ -83,6 +83,62 @@ TEST(Config, LoadsOrbSlam2Settings) {
   EXPECT_EQ(config.orb.fast_min_threshold, 8);
 }
 
+// RGB-D keys (issue 13): Camera.bf, ThDepth and DepthMapFactor in ORB-SLAM2's
+// files, camera.bf / th_depth / depth_factor / max_depth_m in ours.
+TEST(Config, ReadsTheRgbdKeysOfBothFormats) {
+  const std::string orb = writeFile("TUM1_rgbd.yaml",
+                                    "%YAML:1.0\nCamera.fx: 517.306408\nCamera.fy: 516.469215\nCamera.cx: 318.643040\n"
+                                    "Camera.cy: 255.313989\nCamera.bf: 40.0\nThDepth: 35.5\nDepthMapFactor: 5208.0\n");
+  const Config from_orb = loadConfig(orb);
+  EXPECT_DOUBLE_EQ(from_orb.camera.bf, 40.0);
+  EXPECT_DOUBLE_EQ(from_orb.camera.th_depth, 35.5);
+  EXPECT_DOUBLE_EQ(from_orb.camera.depth_factor, 5208.0);
+  EXPECT_DOUBLE_EQ(from_orb.camera.baseline(), 40.0 / 517.306408);
+  EXPECT_DOUBLE_EQ(from_orb.camera.closeDepth(), 40.0 / 517.306408 * 35.5);
+  EXPECT_NO_THROW(requireDepthCamera(from_orb));
+
+  const std::string ours = writeFile("ours_rgbd.yaml",
+                                     "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: 500\n  cx: 320\n  cy: 240\n"
+                                     "  bf: 50\n  th_depth: 30\n  max_depth_m: 4.5\n  depth_factor: 1000\n");
+  const Config from_ours = loadConfig(ours);
+  EXPECT_DOUBLE_EQ(from_ours.camera.bf, 50.0);
+  EXPECT_DOUBLE_EQ(from_ours.camera.closeDepth(), 0.1 * 30);
+  EXPECT_DOUBLE_EQ(from_ours.camera.max_depth_m, 4.5);
+  EXPECT_DOUBLE_EQ(from_ours.camera.depth_factor, 1000.0);
+
+  // The shipped TUM and Bonn files carry ORB-SLAM2's TUM values.
+  for (const char* name : {"tum_fr1", "tum_fr2", "tum_fr3", "bonn"}) {
+    const Config config = loadConfig(projectConfigDir() + "/" + name + ".yaml");
+    EXPECT_DOUBLE_EQ(config.camera.bf, 40.0) << name;
+    EXPECT_DOUBLE_EQ(config.camera.th_depth, 40.0) << name;
+    EXPECT_DOUBLE_EQ(config.camera.depth_factor, 5000.0) << name;
+  }
+}
+
+TEST(Config, RgbdWithoutBfNamesTheKeyAsTheFileSpellsIt) {
+  const std::string orb = writeFile("TUM1_nobf.yaml",
+                                    "%YAML:1.0\nCamera.fx: 517.3\nCamera.fy: 516.4\nCamera.cx: 318.6\nCamera.cy: 255.3\n");
+  try {
+    requireDepthCamera(loadConfig(orb));
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(orb + ": missing required key 'Camera.bf' for RGB-D"), std::string::npos)
+        << e.what();
+  }
+  const std::string ours =
+      writeFile("ours_nobf.yaml", "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: 500\n  cx: 320\n  cy: 240\n");
+  try {
+    requireDepthCamera(loadConfig(ours));
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(ours + ": missing required key 'camera.bf' for RGB-D"), std::string::npos)
+        << e.what();
+  }
+  const std::string negative = writeFile(
+      "ours_negbf.yaml", "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: 500\n  cx: 320\n  cy: 240\n  bf: -3\n");
+  EXPECT_NE(errorOf(negative).find("bf must be >= 0"), std::string::npos) << errorOf(negative);
+}
+
 TEST(Config, OrbSlam2SettingsMissingKeyIsNamed) {
   const std::string path = writeFile("bad_orbslam.yaml", "%YAML:1.0\nCamera.fx: 517.3\nCamera.cx: 318.6\nCamera.cy: 255.3\n");
   const std::string message = errorOf(path);

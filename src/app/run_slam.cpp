@@ -118,12 +118,22 @@ std::string defaultOutDir(const std::string& sequence_name) {
   return "runs/" + name + "-" + stamp;
 }
 
+// A monocular map has no scale of its own: it is aligned by Sim(3), never SE(3).
+// An RGB-D map is metric and aligned by SE(3); the scale a Sim(3) alignment
+// would find is reported beside it, as a check of that metric scale.
 nlohmann::json ateJson(const std::vector<StampedPose>& estimate, const Sequence& sequence, bool mono) {
   AteOptions options;
   options.alignment = mono ? Alignment::Sim3 : Alignment::SE3;
   options.association = Association::Timestamp;
-  const AteResult result = computeAte(estimate, sequence.groundtruth, options);
-  return toJson(result);
+  nlohmann::json json = toJson(computeAte(estimate, sequence.groundtruth, options));
+  json["alignment"] = toString(options.alignment);
+  if (!mono) {
+    options.alignment = Alignment::Sim3;
+    const AteResult sim3 = computeAte(estimate, sequence.groundtruth, options);
+    json["sim3_scale"] = sim3.scale;
+    json["sim3_rmse_m"] = sim3.rmse_m;
+  }
+  return json;
 }
 
 // RPE over 1 s intervals (m/s, deg/s) for TUM and KITTI alike: KITTI frames
@@ -297,6 +307,7 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   report["keyframe_waits"] = stats.keyframe_waits;
   report["map_resets"] = stats.map_resets;
   report["implausible_loops_rejected"] = stats.implausible_loops_rejected;
+  if (!mono) report["frames_without_depth"] = stats.frames_without_depth;
   report["groundtruth_file"] = sequence.groundtruth_path;
   if (sequence.hasGroundTruth() && end > begin) {
     writeRunGroundTruth(out_dir + "/groundtruth.txt", sequence, sequence.frames[begin].timestamp,
@@ -360,9 +371,14 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   if (stats.initialised_at_index >= 0) std::cout << " (initialised at frame " << stats.initialised_at_index << ")";
   std::cout << "\nkeyframes: " << stats.keyframes << ", map points: " << stats.map_points << "\n";
   if (report["ate"].is_object()) {
-    std::printf("ATE RMSE keyframes: %.4f m (%d pairs, scale %.4f)\nATE RMSE frames:    %.4f m (%d pairs)\n",
-                report["ate"]["keyframes"]["rmse_m"].get<double>(), report["ate"]["keyframes"]["pairs"].get<int>(),
-                report["ate"]["keyframes"]["scale"].get<double>(), report["ate"]["frames"]["rmse_m"].get<double>(),
+    const nlohmann::json& kf = report["ate"]["keyframes"];
+    if (mono)
+      std::printf("ATE RMSE keyframes: %.4f m (%d pairs, Sim(3) alignment, scale %.4f)\n", kf["rmse_m"].get<double>(),
+                  kf["pairs"].get<int>(), kf["scale"].get<double>());
+    else
+      std::printf("ATE RMSE keyframes: %.4f m (%d pairs, SE(3) alignment; Sim(3) would scale by %.4f)\n",
+                  kf["rmse_m"].get<double>(), kf["pairs"].get<int>(), kf["sim3_scale"].get<double>());
+    std::printf("ATE RMSE frames:    %.4f m (%d pairs)\n", report["ate"]["frames"]["rmse_m"].get<double>(),
                 report["ate"]["frames"]["pairs"].get<int>());
   }
   if (report.contains("ate_unavailable"))

@@ -37,8 +37,9 @@ class FrameBuilder {
   const OrbExtractor& extractor() const { return extractor_; }
 
  private:
-  // Depth and u_R per keypoint from a depth image (CV_32F metres) of the colour image's size.
-  void sampleDepth(const cv::Mat& depth_m, const std::vector<cv::Point2f>& detected, Frame& frame) const;
+  // Depth and u_R per keypoint (after `frame.points`) from a depth image
+  // (CV_32F metres) registered to the colour image.
+  void sampleDepth(const cv::Mat& depth_m, Frame& frame) const;
 
   Config config_;
   PinholeCamera camera_;

@@ -51,7 +51,7 @@ void injectOutliers(PoseScene& scene, unsigned seed, bool right_coordinate_only 
     Observation2D& obs = scene.observations[i];
     const double sigma = 1.0 / std::sqrt(obs.inv_sigma2);
     if (right_coordinate_only) {
-      if (obs.u_right < 0) continue;
+      if (!hasRightCoordinate(obs.u_right)) continue;
       obs.u_right += magnitude(rng) * sigma;
     } else {
       const Vec3 direction = test::randomUnitVector(rng);

@@ -136,6 +136,28 @@ TEST(Reprojection, DepthGivesTheStereoRightCoordinate) {
   EXPECT_DOUBLE_EQ(rightCoordinateFromDepth(300.0, 2.0, 40.0), 280.0);
 }
 
+// Regression: "u_right < 0" used to mean monocular, so a stereo point whose
+// right coordinate is negative (close, near the left border: u = 10, bf = 386,
+// z = 5 gives u_R = -67) silently lost its third residual. Only
+// kNoRightCoordinate marks a monocular observation now.
+TEST(Reprojection, NegativeRightCoordinateIsStillStereo) {
+  ProjectionModel m;
+  m.fx = m.fy = 500;
+  m.cx = 320;
+  m.cy = 240;
+  m.bf = 386;
+  const Vec3 p_w(-3.1, 0.2, 5.0);  // identity pose: u = 500 * -3.1 / 5 + 320 = 10
+  const Vec2 pixel = Vec2(10.0, 260.0);
+  const double u_right = 10.0 - 386.0 / 5.0;  // -67.2
+  const ReprojectionCheck exact = checkReprojection(m, SE3(), p_w, pixel, u_right, 1.0);
+  EXPECT_NEAR(exact.chi2, 0.0, 1e-18);
+  const ReprojectionCheck off = checkReprojection(m, SE3(), p_w, pixel, u_right - 2.0, 1.0);
+  EXPECT_NEAR(off.chi2, 4.0, 1e-9);  // the right coordinate's error counts
+  EXPECT_NEAR(checkReprojection(m, SE3(), p_w, pixel, kNoRightCoordinate, 1.0).chi2, 0.0, 1e-18);
+  EXPECT_FALSE(hasRightCoordinate(kNoRightCoordinate));
+  EXPECT_TRUE(hasRightCoordinate(u_right));
+}
+
 // Regression: behind the camera the residual used to be zero with a zero
 // Jacobian, so the cost fell off a cliff when a point crossed the image plane.
 // Now a point behind costs more than one in front that projects anywhere in

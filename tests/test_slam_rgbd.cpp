@@ -81,19 +81,20 @@ TEST(RgbdFrame, DepthAndRightCoordinatePerKeypoint) {
   const Frame frame = builder.build(0, 0, 0.0, image, depth, -1, &detections);
   ASSERT_EQ(frame.depth.size(), frame.size());
   ASSERT_EQ(frame.u_right.size(), frame.size());
-  int invalid = 0, at_limit = 0, valid = 0, in_box_with_depth = 0;
+  int invalid = 0, at_limit = 0, valid = 0, in_box_with_depth = 0, outside_right = 0;
   for (size_t i = 0; i < frame.size(); ++i) {
     const int row = cvRound(frame.keypoints[i].pt.y), col = cvRound(frame.keypoints[i].pt.x);
     if (row < 180 && row >= 0) {
       EXPECT_FALSE(frame.hasDepth(i)) << "row " << row;
-      EXPECT_EQ(frame.rightCoordinate(i), -1.0);
+      EXPECT_FALSE(hasRightCoordinate(frame.rightCoordinate(i)));
       ++invalid;
       continue;
     }
     const float expected = row < 240 ? 10.0f : depth.at<float>(row, col);
     if (frame.points[i].x < 40.0 / expected) {
-      // u_R would be negative, which the optimisers read as "monocular".
+      // u_R < 0: outside the virtual right image, so monocular.
       EXPECT_FALSE(frame.hasDepth(i));
+      ++outside_right;
       continue;
     }
     ASSERT_TRUE(frame.hasDepth(i)) << "row " << row << " col " << col;
@@ -107,6 +108,7 @@ TEST(RgbdFrame, DepthAndRightCoordinatePerKeypoint) {
   EXPECT_GT(at_limit, 20);
   EXPECT_GT(valid, 300);
   EXPECT_GT(in_box_with_depth, 50);
+  EXPECT_GT(outside_right, 5);
 
   // Without a depth image the frame is monocular.
   const Frame mono = builder.build(1, 1, 0.0, image);
@@ -133,7 +135,7 @@ TEST(RgbdFrame, DepthIsReadAtTheUndistortedPosition) {
       EXPECT_FALSE(frame.hasDepth(i));
       continue;
     }
-    if (!frame.hasDepth(i)) continue;  // u_R < 0 near the left border
+    if (!frame.hasDepth(i)) continue;  // u_R < 0: outside the virtual right image
     EXPECT_EQ(frame.depth[i], depth.at<float>(row, col));
     ++checked;
     if (cv::Point(col, row) != cv::Point(cvRound(frame.keypoints[i].pt.x), cvRound(frame.keypoints[i].pt.y))) ++moved;

@@ -3,8 +3,9 @@
 #   tools/bench.sh [--runs N] [--out DIR] -- RUN_ARGS...
 # e.g. tools/bench.sh --runs 5 -- --seq tum/fr1_xyz --detector none
 # Prints one line per run and a final "median" line: frames tracked, keyframe
-# and frame ATE RMSE (m), tracking median and p95 (ms per frame, extraction
-# included), wall seconds, fps, peak RSS (MB).
+# and frame ATE RMSE (m; SE(3) for rgbd, Sim(3) for mono), the keyframes'
+# Sim(3) scale (for rgbd the check of its metric scale), tracking median and
+# p95 (ms per frame, extraction included), wall seconds, fps, peak RSS (MB).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -25,12 +26,13 @@ command -v jq >/dev/null || { echo "bench.sh: needs jq (tools/setup.sh installs 
 
 mkdir -p "$out"
 rows="$out/runs.tsv"
-printf 'run\tframes_tracked\tate_kf_m\tate_frames_m\ttrack_median_ms\ttrack_p95_ms\twall_s\tfps\tpeak_mb\n' > "$rows"
+printf 'run\tframes_tracked\tate_kf_m\tate_frames_m\tsim3_scale_kf\ttrack_median_ms\ttrack_p95_ms\twall_s\tfps\tpeak_mb\n' > "$rows"
 for i in $(seq 1 "$runs"); do
   build/vslam run "$@" --out "$out/run$i" > "$out/run$i.stdout" 2> "$out/run$i.log"
   jq -r --arg i "$i" '[ $i, .frames_tracked,
       (if .ate then .ate.keyframes.rmse_m else "nan" end),
       (if .ate then .ate.frames.rmse_m else "nan" end),
+      (if .ate then (.ate.keyframes.sim3_scale // .ate.keyframes.scale) else "nan" end),
       .stage_ms.frame.median, .stage_ms.frame.p95, .wall_s, .fps, .peak_rss_mb ] | @tsv' \
       "$out/run$i/report.json" >> "$rows"
   tail -n 1 "$rows"

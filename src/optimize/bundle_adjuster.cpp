@@ -40,7 +40,7 @@ void validate(const BundleProblem& problem, double bf) {
                                   std::to_string(obs.keyframe) + " / point " + std::to_string(obs.point) +
                                   " out of range");
     }
-    if (obs.u_right >= 0 && bf <= 0) {
+    if (hasRightCoordinate(obs.u_right) && bf <= 0) {
       throw std::invalid_argument("bundleAdjust: stereo observation " + std::to_string(i) + " with bf <= 0");
     }
   }
@@ -96,7 +96,7 @@ BundleResult bundleAdjust(const PinholeCamera& camera, double bf, BundleProblem&
   };
   auto isOutlier = [&](const BaObservation& obs) {
     const ReprojectionCheck check = chi2Of(obs);
-    const double threshold = obs.u_right < 0 ? options.chi2_mono : options.chi2_stereo;
+    const double threshold = hasRightCoordinate(obs.u_right) ? options.chi2_stereo : options.chi2_mono;
     return !check.depth_positive || check.chi2 > threshold;
   };
   std::vector<double> initial_chi2(n_obs);
@@ -119,7 +119,7 @@ BundleResult bundleAdjust(const PinholeCamera& camera, double bf, BundleProblem&
     const BaObservation& obs = problem.observations[i];
     double* pose = poses[obs.keyframe].data();
     double* point = points[obs.point].data();
-    if (obs.u_right < 0) {
+    if (!hasRightCoordinate(obs.u_right)) {
       residual_ids[i] = ceres_problem.AddResidualBlock(
           new ReprojectionCost<2>(model, obs.pixel, obs.u_right, obs.inv_sigma2), &loss_mono, pose, point);
     } else {

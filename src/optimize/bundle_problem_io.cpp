@@ -7,6 +7,8 @@
 //   id fixed x y z                                                               (M lines)
 //   observations K
 //   keyframe_index point_index u v inv_sigma2 u_right                             (K lines)
+// u_right is "-" for a monocular observation (version 2; version 1 files,
+// still read, marked one by a negative u_right).
 // Numbers are written with 17 significant digits, so a save/load round trip is exact.
 #include <cstdio>
 #include <fstream>
@@ -21,7 +23,8 @@ namespace vslam {
 namespace {
 
 constexpr const char* kMagic = "vslam_bundle_problem";
-constexpr int kVersion = 1;
+constexpr int kVersion = 2;
+constexpr int kOldestVersion = 1;
 
 // Reads the file line by line, skipping comments, and reports errors with the line number.
 class LineReader {
@@ -89,7 +92,11 @@ void saveBundleProblem(const std::string& path, const PinholeCamera& camera, dou
   out << "observations " << problem.observations.size() << '\n';
   for (const BaObservation& obs : problem.observations) {
     out << obs.keyframe << ' ' << obs.point << ' ' << obs.pixel.x() << ' ' << obs.pixel.y() << ' ' << obs.inv_sigma2
-        << ' ' << obs.u_right << '\n';
+        << ' ';
+    if (hasRightCoordinate(obs.u_right))
+      out << obs.u_right << '\n';
+    else
+      out << "-\n";
   }
   if (!out) throw InputError(path, 0, "error while writing bundle problem file");
 }
@@ -97,14 +104,17 @@ void saveBundleProblem(const std::string& path, const PinholeCamera& camera, dou
 RecordedBundleProblem loadBundleProblem(const std::string& path) {
   LineReader reader(path);
   RecordedBundleProblem recorded;
+  int file_version = 0;
   {
     std::istringstream line = reader.next("header");
     std::string magic;
     int version = 0;
     line >> magic >> version;
-    if (magic != kMagic || version != kVersion) {
-      reader.fail(std::string("not a '") + kMagic + " " + std::to_string(kVersion) + "' file");
+    if (magic != kMagic || version < kOldestVersion || version > kVersion) {
+      reader.fail(std::string("not a '") + kMagic + " " + std::to_string(kOldestVersion) + ".." +
+                  std::to_string(kVersion) + "' file");
     }
+    file_version = version;
   }
   {
     std::istringstream line = reader.next("camera");
@@ -134,8 +144,16 @@ RecordedBundleProblem loadBundleProblem(const std::string& path) {
   const int n_points = static_cast<int>(problem.points.size());
   for (BaObservation& obs : problem.observations) {
     std::istringstream line = reader.next("observation");
+    std::string right;
     reader.parse(line, "observation line", obs.keyframe, obs.point, obs.pixel.x(), obs.pixel.y(), obs.inv_sigma2,
-                 obs.u_right);
+                 right);
+    if (right == "-") {
+      obs.u_right = kNoRightCoordinate;
+    } else {
+      std::istringstream number(right);
+      if (!(number >> obs.u_right) || !number.eof()) reader.fail("malformed u_right '" + right + "'");
+      if (file_version == 1 && obs.u_right < 0) obs.u_right = kNoRightCoordinate;
+    }
     if (obs.keyframe < 0 || obs.keyframe >= n_keyframes || obs.point < 0 || obs.point >= n_points) {
       reader.fail("observation index out of range");
     }

@@ -35,7 +35,7 @@ PoseOptimizationResult optimizePose(const PinholeCamera& camera, double bf, cons
       throw std::invalid_argument("optimizePose: observation refers to point " + std::to_string(obs.point) +
                                   " of " + std::to_string(points_w.size()));
     }
-    if (obs.u_right >= 0 && bf <= 0) throw std::invalid_argument("optimizePose: stereo observation with bf <= 0");
+    if (hasRightCoordinate(obs.u_right) && bf <= 0) throw std::invalid_argument("optimizePose: stereo observation with bf <= 0");
   }
 
   PoseParameters pose = poseToParameters(T_cw_initial);
@@ -49,7 +49,7 @@ PoseOptimizationResult optimizePose(const PinholeCamera& camera, double bf, cons
       const Observation2D& obs = observations[i];
       const ReprojectionCheck check =
           checkReprojection(model, T_cw, points_w[obs.point], obs.pixel, obs.u_right, obs.inv_sigma2);
-      const double threshold = obs.u_right < 0 ? options.chi2_mono : options.chi2_stereo;
+      const double threshold = hasRightCoordinate(obs.u_right) ? options.chi2_stereo : options.chi2_mono;
       result.inlier[i] = check.depth_positive && check.chi2 < threshold;
       result.n_inliers += result.inlier[i] ? 1 : 0;
     }
@@ -77,7 +77,7 @@ PoseOptimizationResult optimizePose(const PinholeCamera& camera, double bf, cons
   for (size_t i = 0; i < observations.size(); ++i) {
     const Observation2D& obs = observations[i];
     const Vec3& point = points_w[obs.point];
-    if (obs.u_right < 0) {
+    if (!hasRightCoordinate(obs.u_right)) {
       terms[i].mono = std::make_unique<PoseOnlyReprojectionCost<2>>(model, point, obs.pixel, obs.u_right,
                                                                      obs.inv_sigma2);
       problem.AddResidualBlock(terms[i].mono.get(), &huber_mono, pose.data());

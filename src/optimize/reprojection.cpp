@@ -161,7 +161,7 @@ ReprojectionCheck checkReprojection(const ProjectionModel& model, const SE3& T_c
     return check;
   }
   const double sqrt_information = std::sqrt(inv_sigma2);
-  if (u_right < 0) {
+  if (!hasRightCoordinate(u_right)) {
     Eigen::Vector2d r;
     reprojectionResidual<2>(model, sqrt_information, measurementVector<2>(pixel, u_right), p_c, r.data(), nullptr);
     check.chi2 = r.squaredNorm();

@@ -10,6 +10,7 @@
 #include "vslam/core/camera.hpp"
 #include "vslam/core/types.hpp"
 #include "vslam/feature/matcher.hpp"
+#include "vslam/optimize/reprojection.hpp"
 
 namespace vslam {
 
@@ -44,9 +45,9 @@ struct Frame {
   std::vector<FeatureLabel> labels;     // one per keypoint
   std::vector<cv::Vec3b> colours;       // BGR at each keypoint
   // RGB-D: per keypoint the depth (metres) and the right-image coordinate
-  // u_R = u - bf / depth of a virtual stereo pair; both < 0 where the depth
-  // image has no valid reading (a monocular keypoint). Empty for a frame
-  // without a depth image.
+  // u_R = u - bf / depth of a virtual stereo pair (u_R may be negative).
+  // depth < 0 where the depth image has no valid reading: a monocular
+  // keypoint. Both empty for a frame without a depth image.
   std::vector<float> depth;
   std::vector<float> u_right;
   FeatureGrid grid;                     // spatial index of `points`
@@ -66,8 +67,8 @@ struct Frame {
   FeatureView view() const { return {keypoints, points, descriptors}; }
   Vec2 point(size_t i) const { return Vec2(points[i].x, points[i].y); }
   bool hasDepth(size_t i) const { return i < depth.size() && depth[i] > 0; }
-  // The optimisers' right coordinate: u_R, or -1 for a monocular keypoint.
-  double rightCoordinate(size_t i) const { return hasDepth(i) ? u_right[i] : -1.0; }
+  // The optimisers' right coordinate: u_R, or kNoRightCoordinate for a monocular keypoint.
+  double rightCoordinate(size_t i) const { return hasDepth(i) ? u_right[i] : kNoRightCoordinate; }
   bool hasDepthImage() const { return !depth.empty(); }
   int trackedCount() const;  // matched, non-outlier keypoints
 };

@@ -42,7 +42,7 @@ class KeyFrame {
   FeatureView view() const { return {keypoints, points, descriptors}; }
   Vec2 point(size_t i) const { return Vec2(points[i].x, points[i].y); }
   bool hasDepth(size_t i) const { return i < depth.size() && depth[i] > 0; }
-  double rightCoordinate(size_t i) const { return hasDepth(i) ? u_right[i] : -1.0; }
+  double rightCoordinate(size_t i) const { return hasDepth(i) ? u_right[i] : kNoRightCoordinate; }
   // The keypoint's 3D point from its depth, in world coordinates (hasDepth(i)).
   Vec3 unprojectToWorld(size_t i) const;
   // Bag of words and direct index, set once by Local Mapping when it takes the

@@ -41,7 +41,7 @@ struct BaObservation {
   int point = 0;
   Vec2 pixel = Vec2::Zero();
   double inv_sigma2 = 1.0;
-  double u_right = -1.0;  // stereo / RGB-D: u - bf / depth; negative: monocular
+  double u_right = kNoRightCoordinate;  // stereo / RGB-D: u - bf / depth
 };
 
 struct BundleProblem {

@@ -13,12 +13,12 @@
 namespace vslam {
 
 // One keypoint matched to a map point. Stereo / RGB-D observations also carry
-// the right-image coordinate u_right = u - bf / depth (negative: monocular).
+// the right-image coordinate u_right = u - bf / depth (kNoRightCoordinate: monocular).
 struct Observation2D {
   int point = 0;            // index into the points vector
   Vec2 pixel = Vec2::Zero();  // undistorted keypoint
   double inv_sigma2 = 1.0;  // 1 / sigma^2 of the keypoint's pyramid level
-  double u_right = -1.0;
+  double u_right = kNoRightCoordinate;
 };
 
 struct PoseOptimizationOptions {

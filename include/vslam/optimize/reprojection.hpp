@@ -7,12 +7,14 @@
 // (x, y, z, w) followed by the translation.
 //
 // Residuals. An observation is a pixel (u, v) and, for stereo / RGB-D, the
-// right-image coordinate u_right = u - bf / depth. The residual is the
+// right-image coordinate u_right = u - bf / depth (kNoRightCoordinate when
+// there is none). The residual is the
 // predicted minus the measured coordinates, whitened by sqrt(inv_sigma2), so
 // its squared norm is the chi-square statistic with 2 (mono) or 3 (stereo)
 // degrees of freedom.
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Core>
 #include <ceres/manifold.h>
@@ -31,6 +33,12 @@ constexpr double kChi2Stereo = 7.815;  // 3 degrees of freedom
 // its residual keeps growing with the distance behind (no cost cliff; see
 // reprojectionResidual), and outlier classification rejects it.
 constexpr double kMinPositiveDepth = 1e-6;
+
+// An observation without a right-image coordinate (monocular). Every other
+// value is one, negative ones included: a close point near the left border
+// has u_R < 0, and must not silently turn monocular.
+inline constexpr double kNoRightCoordinate = std::numeric_limits<double>::quiet_NaN();
+inline bool hasRightCoordinate(double u_right) { return !std::isnan(u_right); }
 
 // RGB-D observations become stereo ones: the right-image coordinate a stereo
 // rig with the same bf would have measured for a keypoint at `depth`.
@@ -90,7 +98,7 @@ struct ReprojectionCheck {
   double chi2 = 0;
   bool depth_positive = false;
 };
-// u_right < 0 means monocular.
+// u_right = kNoRightCoordinate means monocular.
 ReprojectionCheck checkReprojection(const ProjectionModel& model, const SE3& T_cw, const Vec3& point_w,
                                     const Vec2& pixel, double u_right, double inv_sigma2);
 

@@ -375,11 +375,42 @@ TEST(CliEval, MalformedFileExitsTwoWithOneLine) {
       << apart.err;
 }
 
+// A monocular run is never scored with SE(3): without --align, eval takes the
+// alignment from the run's report.json (issue 13).
+TEST(CliEval, AlignmentFollowsTheRunsMode) {
+  const fs::path dir = test::scratchDir("cli_eval_auto");
+  const std::string gt = (test::tumSequence("freiburg1_xyz") / "groundtruth.txt").string();
+  // The ground truth itself, scaled by 0.5 about the first pose: a monocular map.
+  const std::vector<StampedPose> truth = readTumTrajectory(gt);
+  std::vector<StampedPose> half(truth.begin(), truth.begin() + 300);
+  for (StampedPose& pose : half) pose.T_wc.t = truth.front().T_wc.t + 0.5 * (pose.T_wc.t - truth.front().T_wc.t);
+  for (const char* mode : {"mono", "rgbd", "none"}) {
+    fs::create_directories(dir / mode);
+    writeTumTrajectory((dir / mode / "trajectory.txt").string(), half);
+    if (std::string(mode) != "none") std::ofstream(dir / mode / "report.json") << "{\"mode\": \"" << mode << "\"}\n";
+  }
+  const Outcome mono = vslam("eval --est " + quoted((dir / "mono" / "trajectory.txt").string()) + " --gt " + quoted(gt));
+  ASSERT_EQ(mono.exit_code, 0) << mono.err;
+  EXPECT_TRUE(contains(mono.out, "alignment: sim3 (monocular run")) << mono.out;
+  EXPECT_TRUE(contains(mono.out, "scale 2.000000")) << mono.out;
+  const Outcome rgbd = vslam("eval --est " + quoted((dir / "rgbd" / "trajectory.txt").string()) + " --gt " + quoted(gt));
+  ASSERT_EQ(rgbd.exit_code, 0) << rgbd.err;
+  EXPECT_TRUE(contains(rgbd.out, "alignment: se3 (RGB-D run")) << rgbd.out;
+  EXPECT_TRUE(contains(rgbd.out, "scale 1.000000")) << rgbd.out;
+  const Outcome none = vslam("eval --est " + quoted((dir / "none" / "trajectory.txt").string()) + " --gt " + quoted(gt));
+  ASSERT_EQ(none.exit_code, 0) << none.err;
+  EXPECT_TRUE(contains(none.out, "alignment: se3 (no report.json beside the estimate")) << none.out;
+  const Outcome forced = vslam("eval --est " + quoted((dir / "mono" / "trajectory.txt").string()) + " --gt " +
+                               quoted(gt) + " --align se3");
+  ASSERT_EQ(forced.exit_code, 0) << forced.err;
+  EXPECT_FALSE(contains(forced.out, "alignment:")) << forced.out;
+}
+
 TEST(CliEval, HelpListsEveryOptionAndItsDefault) {
   const Outcome help = vslam("eval --help");
   EXPECT_EQ(help.exit_code, 0);
   for (const char* option :
-       {"--est", "--gt", "--align", "=se3", "--format", "=tum", "--json", "--max-dt", "=0.02", "--rpe-delta"})
+       {"--est", "--gt", "--align", "=auto", "--format", "=tum", "--json", "--max-dt", "=0.02", "--rpe-delta"})
     EXPECT_TRUE(contains(help.out, option)) << option << "\n" << help.out;
 }
 

@@ -1,5 +1,6 @@
 // `vslam eval`: scores an estimated trajectory against ground truth (ATE and RPE).
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -20,7 +21,7 @@ namespace {
 struct EvalOptions {
   std::string estimate_path;
   std::string groundtruth_path;
-  std::string align = "se3";
+  std::string align = "auto";
   std::string format = "tum";
   std::string json_path;
   double max_dt = 0.02;
@@ -39,6 +40,36 @@ std::string number(double value) {
   return text;
 }
 
+// "auto": the alignment the run's own report.json (beside the estimate) calls
+// for: Sim(3) for a monocular run, whose scale is arbitrary, SE(3) for RGB-D.
+// A file outside a run folder is taken as metric (SE(3)), and the output says so.
+Alignment chooseAlignment(const EvalOptions& options, std::string& why) {
+  if (options.align == "sim3") return Alignment::Sim3;
+  if (options.align == "se3") return Alignment::SE3;
+  const std::filesystem::path report = std::filesystem::path(options.estimate_path).parent_path() / "report.json";
+  std::ifstream in(report);
+  if (!in) {
+    why = "no report.json beside the estimate: taken as metric";
+    return Alignment::SE3;
+  }
+  nlohmann::json json;
+  try {
+    in >> json;
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(report.string(), 0, std::string("not valid JSON (") + e.what() + "); pass --align se3|sim3");
+  }
+  const std::string mode = json.contains("mode") && json["mode"].is_string() ? json["mode"].get<std::string>() : "";
+  if (mode == "mono") {
+    why = "monocular run (" + report.string() + ")";
+    return Alignment::Sim3;
+  }
+  if (mode == "rgbd") {
+    why = "RGB-D run (" + report.string() + ")";
+    return Alignment::SE3;
+  }
+  throw InputError(report.string(), 0, "has no \"mode\" of mono or rgbd; pass --align se3|sim3");
+}
+
 int run(const EvalOptions& options) {
   const bool kitti = options.format == "kitti";
   const std::vector<StampedPose> estimate = readTrajectory(options.estimate_path, options.format);
@@ -48,7 +79,9 @@ int run(const EvalOptions& options) {
                  options.groundtruth_path, groundtruth.size(), std::min(estimate.size(), groundtruth.size()));
 
   AteOptions ate_options;
-  ate_options.alignment = options.align == "sim3" ? Alignment::Sim3 : Alignment::SE3;
+  std::string why;
+  ate_options.alignment = chooseAlignment(options, why);
+  if (!why.empty()) std::cout << "alignment: " << toString(ate_options.alignment) << " (" << why << ")\n";
   ate_options.association = kitti ? Association::Index : Association::Timestamp;
   ate_options.max_time_diff = options.max_dt;
   AteResult ate;
@@ -101,8 +134,10 @@ Command addEvalCommand(CLI::App& app) {
   CLI::App* cli = app.add_subcommand("eval", "Score an estimated trajectory against ground truth (ATE, RPE)");
   cli->add_option("--est", options->estimate_path, "Estimated trajectory (camera-to-world poses)")->required();
   cli->add_option("--gt", options->groundtruth_path, "Ground-truth trajectory")->required();
-  cli->add_option("--align", options->align, "Alignment: se3 for metric runs, sim3 (with scale) for monocular ones")
-      ->check(CLI::IsMember({"se3", "sim3"}))
+  cli->add_option("--align", options->align,
+                  "Alignment: se3 for metric runs, sim3 (with scale) for monocular ones; auto: from the run's "
+                  "report.json beside --est (mono: sim3, rgbd: se3; no report: se3)")
+      ->check(CLI::IsMember({"auto", "se3", "sim3"}))
       ->capture_default_str();
   cli->add_option("--format", options->format,
                   "File format: tum ('timestamp tx ty tz qx qy qz qw', paired by timestamp) or kitti (12 numbers "

@@ -26,6 +26,7 @@ constexpr int kInitMinKeypointsWithDepth = 500;  // ORB-SLAM2's RGB-D initialisa
 constexpr int kCloseTrackedFew = 100;             // ORB-SLAM2's close-point keyframe rule...
 constexpr int kCloseUntrackedMany = 70;           // ...tracked < 100 and untracked > 70
 constexpr int kNewKeyFrameMinDepthPoints = 100;   // a keyframe adds depth points up to at least this many
+constexpr double kRgbdLeavingMapRatio = 0.25;     // ORB-SLAM2's RGB-D c1c: tracked < 25 % of the reference's
 constexpr int kInitMinMatches = 100;
 constexpr double kInitWindowPx = 100.0;
 constexpr double kProjectionRadiusPx = 15.0;  // monocular search window around the predicted position
@@ -574,11 +575,16 @@ bool Tracking::needNewKeyFrame(const Frame& frame) const {
 
   // The paper's rule: at least 20 frames since the last keyframe or fewer than
   // 100 tracked points, and fewer than 90 % of the reference keyframe's points tracked.
-  // RGB-D adds ORB-SLAM2's close-point rule: few close points tracked while
-  // many close ones could be added means the map is thinning where depth is best.
+  // RGB-D adds ORB-SLAM2's two RGB-D conditions: few close points tracked
+  // while many close ones could be added (the map thins where depth is best),
+  // or fewer than a quarter of the reference keyframe's points tracked (the
+  // camera is leaving its map faster than 20 frames; on fr3_teddy this takes
+  // keyframe ATE from 1.1-1.3 to 0.7-0.85 cm, docs/BENCHMARKS.md).
+  const bool rgbd = config_.sensor == SensorMode::RgbD;
   const bool need_close_points = needCloseKeyFrame(frame);
+  const bool leaving_map = rgbd && matches_inliers_ < kRgbdLeavingMapRatio * reference_points;
   const bool enough_time_or_weak = frames_since >= params.max_frames_between_keyframes ||
-                                   matches_inliers_ < params.min_tracked_points || need_close_points;
+                                   matches_inliers_ < params.min_tracked_points || need_close_points || leaving_map;
   const bool new_content =
       (matches_inliers_ < params.ref_ratio * reference_points || need_close_points) && matches_inliers_ > 15;
   if (!(enough_time_or_weak && new_content)) return false;

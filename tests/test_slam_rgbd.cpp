@@ -182,7 +182,8 @@ struct Fr1Run {
   SystemStats stats;
 };
 
-Fr1Run runFr1(const Sequence& sequence, SensorMode sensor, bool deterministic, size_t count) {
+Fr1Run runFr1(const Sequence& sequence, SensorMode sensor, bool deterministic, size_t count,
+             bool depth_to_mono = false) {
   Config config = rgbdConfig(sequence.config);
   config.sensor = sensor;
   SystemOptions options;
@@ -190,7 +191,7 @@ Fr1Run runFr1(const Sequence& sequence, SensorMode sensor, bool deterministic, s
   System system(config, options);
   for (size_t i = 0; i < count && i < sequence.frames.size(); ++i) {
     const cv::Mat colour = sequence.loadColor(i);
-    const bool with_depth = sensor == SensorMode::RgbD && !sequence.frames[i].depth_path.empty();
+    const bool with_depth = (sensor == SensorMode::RgbD || depth_to_mono) && !sequence.frames[i].depth_path.empty();
     system.processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, colour,
                         with_depth ? sequence.loadDepthMeters(i, colour.size()) : cv::Mat());
   }
@@ -249,6 +250,11 @@ TEST(SlamRgbd, DepthIsUsed) {
   const double rgbd_scale = ate(rgbd.keyframes, sequence.groundtruth, Alignment::Sim3).scale;
   EXPECT_NEAR(rgbd_scale, 1.0, 0.05);
   EXPECT_GT(std::abs(mono_scale - 1.0), 0.1) << "a monocular map has the scale of its initialisation";
+
+  // A monocular system given depth images ignores them: the same run to the digit.
+  const Fr1Run mono_with_depth = runFr1(sequence, SensorMode::Monocular, true, 120, true);
+  ASSERT_EQ(mono_with_depth.frames.size(), mono.frames.size());
+  for (size_t i = 0; i < mono.frames.size(); ++i) EXPECT_EQ(mono_with_depth.frames[i].T_wc.t, mono.frames[i].T_wc.t);
 }
 
 }  // namespace

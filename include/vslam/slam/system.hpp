@@ -91,7 +91,9 @@ class System {
   System(const System&) = delete;
   System& operator=(const System&) = delete;
 
-  // Tracks one image (BGR or grey); `depth_m` CV_32F metres or empty. Returns true when tracked.
+  // Tracks one image (BGR or grey); `depth_m` CV_32F metres, registered to it,
+  // or empty. Depth is used only when config.sensor is RgbD; a monocular
+  // system ignores it. Returns true when tracked.
   // With a detector, the frame's detections come first: those started by
   // submitAhead(), else detection runs now and Tracking waits for all of it.
   bool processFrame(int index, double timestamp, const cv::Mat& image, const cv::Mat& depth_m = cv::Mat());

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include "sequence_test_support.hpp"
 #include "test_support.hpp"
 #include "vslam/core/config.hpp"
 #include "vslam/eval/ate.hpp"
@@ -19,12 +20,6 @@
 
 namespace vslam {
 namespace {
-
-Sequence openShared(const std::string& name) {
-  SequenceOptions options;
-  options.data_root = test::sharedData().string();
-  return openSequence(name, options);
-}
 
 AteResult ate(const std::vector<StampedPose>& estimate, const std::vector<StampedPose>& groundtruth,
               Alignment alignment) {
@@ -173,6 +168,7 @@ TEST(SlamRgbd, RoomWithExactDepthIsMetric) {
   // their bound is the measured figure with a margin, not the target.
   EXPECT_LE(metric.rmse_m, 0.005);
   EXPECT_LT(frames.rmse_m, 0.009);
+  ASSERT_FALSE(system.loops().empty()) << "the room's second turn revisits the start";
   for (const LoopRecord& loop : system.loops()) EXPECT_EQ(loop.scale, 1.0);  // SE(3): scale fixed
 }
 
@@ -204,7 +200,7 @@ Fr1Run runFr1(const Sequence& sequence, SensorMode sensor, bool deterministic, s
 // BENCHMARKS.md) about 0.75 cm for keyframes and 0.97 cm for frames, scale
 // within 0.3 %; the bounds leave room for run-to-run spread.
 TEST(SlamRgbd, Fr1XyzTracksEveryFrameWithDepthAtMetricScale) {
-  const Sequence sequence = openShared("tum/fr1_xyz");
+  const Sequence sequence = test::openSharedSequence("tum/fr1_xyz");
   std::set<int> with_depth;
   for (const FrameEntry& frame : sequence.frames)
     if (!frame.depth_path.empty()) with_depth.insert(frame.index);
@@ -229,7 +225,7 @@ TEST(SlamRgbd, Fr1XyzTracksEveryFrameWithDepthAtMetricScale) {
 // map dense enough: without it keyframe ATE was 1.1-1.3 cm and the scale 1.5 %
 // short; with it 0.72-0.85 cm (docs/BENCHMARKS.md).
 TEST(SlamRgbd, Fr3TeddyIsTrackedAccuratelyAtMetricScale) {
-  const Sequence sequence = openShared("tum/fr3_teddy");
+  const Sequence sequence = test::openSharedSequence("tum/fr3_teddy");
   const Fr1Run run = runFr1(sequence, SensorMode::RgbD, false, sequence.frames.size());
   EXPECT_EQ(run.stats.frames_tracked, 200);
   EXPECT_LT(ate(run.keyframes, sequence.groundtruth, Alignment::SE3).rmse_m, 0.0105);
@@ -239,7 +235,7 @@ TEST(SlamRgbd, Fr3TeddyIsTrackedAccuratelyAtMetricScale) {
 // Depth must change the run: the same frames in mono and RGB-D give other
 // trajectories, and only the RGB-D one is metric without a scale.
 TEST(SlamRgbd, DepthIsUsed) {
-  const Sequence sequence = openShared("tum/fr1_xyz");
+  const Sequence sequence = test::openSharedSequence("tum/fr1_xyz");
   const Fr1Run mono = runFr1(sequence, SensorMode::Monocular, true, 120);
   const Fr1Run rgbd = runFr1(sequence, SensorMode::RgbD, true, 120);
   ASSERT_GT(mono.frames.size(), 60u);

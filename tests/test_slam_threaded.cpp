@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "sequence_test_support.hpp"
 #include "test_support.hpp"
 #include "vslam/eval/ate.hpp"
 #include "vslam/io/sequence.hpp"
@@ -19,12 +20,6 @@
 
 namespace vslam {
 namespace {
-
-Sequence openShared(const std::string& name) {
-  SequenceOptions options;
-  options.data_root = test::sharedData().string();
-  return openSequence(name, options);
-}
 
 double ateRmse(const std::vector<StampedPose>& estimate, const std::vector<StampedPose>& groundtruth) {
   AteOptions options;
@@ -40,7 +35,7 @@ Config withoutDetector(Config config) {
 // The whole of fr1_xyz, threaded: deterministic runs track 796 of 798 frames
 // with a keyframe ATE of 0.9 cm; threaded runs must do as well within noise.
 TEST(SlamThreaded, Fr1XyzWholeSequenceTracksAccurately) {
-  const Sequence sequence = openShared("tum/fr1_xyz");
+  const Sequence sequence = test::openSharedSequence("tum/fr1_xyz");
   System system(withoutDetector(sequence.config), SystemOptions{});
   for (size_t i = 0; i < sequence.frames.size(); ++i)
     system.processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, sequence.loadColor(i));
@@ -127,8 +122,8 @@ TEST(SlamThreaded, DISABLED_CirclingARoomKeepsTheDeterministicAccuracy) {
 // (frames of another scene), the map is reset, and the run goes on to
 // initialise again and track the rest.
 TEST(SlamThreaded, ResetAfterEarlyLossLeavesLoopClosingCleanAndReinitialises) {
-  const Sequence xyz = openShared("tum/fr1_xyz");
-  const Sequence teddy = openShared("tum/fr3_teddy");
+  const Sequence xyz = test::openSharedSequence("tum/fr1_xyz");
+  const Sequence teddy = test::openSharedSequence("tum/fr3_teddy");
   System system(withoutDetector(xyz.config), SystemOptions{});
   size_t next = 0;
   while (next < 40 && system.stats().initialised_at_index < 0) {
@@ -166,7 +161,7 @@ TEST(SlamThreaded, ResetAfterEarlyLossLeavesLoopClosingCleanAndReinitialises) {
 // Regression: an exception on the Local Mapping thread ended in std::terminate.
 // It must reach the caller as one error that names the thread.
 TEST(SlamThreaded, LocalMappingFailureReachesTheCaller) {
-  const Sequence sequence = openShared("tum/fr1_xyz");
+  const Sequence sequence = test::openSharedSequence("tum/fr1_xyz");
   SystemOptions options;
   options.after_keyframe_mapped = [](long id) {
     if (id == 3) throw std::runtime_error("injected failure at keyframe 3");

@@ -12,23 +12,19 @@ namespace vslam {
 MapPoint::MapPoint(long id, const Vec3& position_w, KeyFrame* reference, long first_keyframe_id)
     : id_(id), first_keyframe_id_(first_keyframe_id), position_w_(position_w), reference_(reference) {}
 
-namespace {
-int weightOf(const KeyFrame* keyframe, int keypoint) { return keyframe->hasDepth(keypoint) ? 2 : 1; }
-}  // namespace
-
 void MapPoint::addObservation(KeyFrame* keyframe, int keypoint) {
   auto [it, inserted] = observations_.try_emplace(keyframe, keypoint);
   if (!inserted) {
-    observation_weight_ -= weightOf(keyframe, it->second);
+    observation_weight_ -= keyframe->observationWeight(it->second);
     it->second = keypoint;
   }
-  observation_weight_ += weightOf(keyframe, keypoint);
+  observation_weight_ += keyframe->observationWeight(keypoint);
 }
 
 void MapPoint::eraseObservation(KeyFrame* keyframe) {
   auto it = observations_.find(keyframe);
   if (it == observations_.end()) return;
-  observation_weight_ -= weightOf(keyframe, it->second);
+  observation_weight_ -= keyframe->observationWeight(it->second);
   observations_.erase(it);
   if (reference_ == keyframe && !observations_.empty()) reference_ = observations_.begin()->first;
   // A point seen from one keyframe without depth carries no depth information;

@@ -90,7 +90,8 @@ Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& b
     else
       frame.colours[i] = cv::Vec3b::all(gray.at<uint8_t>(p));
   }
-  if (!depth_m.empty()) {
+  // A monocular run ignores depth even when given one: every keypoint stays monocular.
+  if (!depth_m.empty() && config_.sensor == SensorMode::RgbD) {
     if (depth_m.size() != bgr.size() || depth_m.type() != CV_32F)
       throw std::invalid_argument("FrameBuilder: the depth image must be CV_32F and of the colour image's size");
     sampleDepth(depth_m, frame);

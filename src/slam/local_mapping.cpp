@@ -305,7 +305,7 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
   int created = 0;
 
   const bool rgbd = config_.sensor == SensorMode::RgbD;
-  const double bf = camera.bf;
+  const ProjectionModel model(camera, camera.bf);
   const double baseline = camera.baseline();
   // ORB-SLAM2 triangulates with 10 neighbours when depth is measured, 20 when not.
   const size_t neighbours = rgbd ? kTriangulationNeighboursDepth : kTriangulationNeighbours;
@@ -347,17 +347,13 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
       const Vec3 p1 = T1 * X, p2 = T2 * X;
       if (p1.z() <= 0 || p2.z() <= 0) continue;
       // Reprojection within the 95 % chi-square bound at each keypoint's scale
-      // (3 dof with the right coordinate where the keypoint has depth).
-      auto reprojects = [&](const KeyFrame& kf, int i, const Vec3& p_c, bool with_depth) {
-        const Vec2 px = kf.camera().project(p_c);
-        double e2 = (px - kf.point(i)).squaredNorm();
-        if (with_depth) {
-          const double right_error = px.x() - bf / p_c.z() - kf.u_right[i];
-          e2 += right_error * right_error;
-        }
-        return e2 <= (with_depth ? kChi2Stereo : kChi2Mono) * pyramid.sigma2[kf.keypoints[i].octave];
+      // (with the right coordinate where the keypoint has depth).
+      auto reprojects = [&](const KeyFrame& kf, int i) {
+        const double u_right = kf.rightCoordinate(i);
+        return checkReprojection(model, kf.pose(), X, kf.point(i), u_right, pyramid.inv_sigma2[kf.keypoints[i].octave])
+                   .chi2 <= chi2Bound95(u_right);
       };
-      if (!reprojects(*keyframe, i1, p1, depth1) || !reprojects(*neighbour, i2, p2, depth2)) continue;
+      if (!reprojects(*keyframe, i1) || !reprojects(*neighbour, i2)) continue;
       // The distance ratio must agree with the pyramid levels the point was seen at.
       const double dist1 = (X - C1).norm(), dist2 = (X - C2).norm();
       if (dist1 <= 0 || dist2 <= 0) continue;

@@ -107,7 +107,7 @@ FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations,
         problem.observations.push_back({it->second, static_cast<int>(points.size()), kf->point(index),
                                         kf->pyramid().inv_sigma2[kf->keypoints[index].octave],
                                         kf->rightCoordinate(index)});
-        weight += kf->hasDepth(index) ? 2 : 1;
+        weight += kf->observationWeight(index);
       }
       // Points seen only once without depth would be unconstrained along their ray.
       if (weight < 2) {

@@ -262,13 +262,14 @@ std::optional<PredictedObservation> predictObservation(const MapPoint& point, co
   const double distance = ray.norm();
   if (distance < point.minDistance() || distance > point.maxDistance()) return std::nullopt;
   if (ray.dot(point.normal()) < 0.5 * distance) return std::nullopt;
-  return PredictedObservation{px, point.predictLevel(distance, keyframe.pyramid()), p_c.z()};
+  return PredictedObservation{px, point.predictLevel(distance, keyframe.pyramid())};
 }
 
 int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius_factor) {
   const ScalePyramid& pyramid = keyframe->pyramid();
   const Sim3 S_cw(keyframe->pose());
   const Vec3 centre = keyframe->cameraCentre();
+  const ProjectionModel model(keyframe->camera(), keyframe->camera().bf);
   int fused = 0;
   for (MapPoint* point : points) {
     if (!point || point->isBad() || point->keypointIn(keyframe) >= 0) continue;
@@ -283,16 +284,12 @@ int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius
     for (int j : candidates) {
       const int kp_level = keyframe->keypoints[j].octave;
       if (kp_level < level - 1 || kp_level > level) continue;
-      // Reprojection gate at the keypoint's scale (chi-square 95 %: 2 dof, or
-      // 3 with the right coordinate of a keypoint with depth).
-      double e2 = (keyframe->point(j) - px).squaredNorm();
-      double chi2 = kChi2Mono;
-      if (keyframe->hasDepth(j)) {
-        const double predicted_right = px.x() - keyframe->camera().bf / seen->depth;
-        e2 += (predicted_right - keyframe->u_right[j]) * (predicted_right - keyframe->u_right[j]);
-        chi2 = kChi2Stereo;
-      }
-      if (e2 * pyramid.inv_sigma2[kp_level] > chi2) continue;
+      // Reprojection gate at the keypoint's scale (chi-square 95 %, with the
+      // right coordinate where the keypoint has depth).
+      const double u_right = keyframe->rightCoordinate(j);
+      if (checkReprojection(model, keyframe->pose(), point->position(), keyframe->point(j), u_right,
+                            pyramid.inv_sigma2[kp_level]).chi2 > chi2Bound95(u_right))
+        continue;
       const int d = hammingDistance(point->descriptor().ptr<uint8_t>(), keyframe->descriptors.ptr<uint8_t>(j));
       if (d < best_distance) {
         best_distance = d;

@@ -98,9 +98,7 @@ bool System::processFrame(int index, double timestamp, const cv::Mat& image, con
     const bool initialising =
         tracking_->state() == TrackingState::NotInitialized && config_.sensor == SensorMode::Monocular;
     const int n_features = initialising ? 2 * config_.orb.n_features : -1;
-    // A monocular run ignores depth even when given one: every keypoint stays monocular.
-    const cv::Mat& depth = config_.sensor == SensorMode::RgbD ? depth_m : cv::Mat();
-    frame = frame_builder_->build(next_frame_id_++, index, timestamp, image, depth, n_features,
+    frame = frame_builder_->build(next_frame_id_++, index, timestamp, image, depth_m, n_features,
                                   detection_ ? &detections : nullptr, &filter);
   }
   if (detection_) {

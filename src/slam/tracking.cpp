@@ -288,18 +288,22 @@ void Tracking::initialise(Frame& frame) {
   frame.T_cw = kf_cur->pose();
   for (size_t i = 0; i < frame.size(); ++i) frame.map_points[i] = kf_cur->mapPoint(i);
   frame.outlier.assign(frame.size(), false);
+  startTracking(frame, {kf_ref, kf_cur}, points);
+  init_reference_.reset();
+}
+
+void Tracking::startTracking(const Frame& frame, std::vector<KeyFrame*> keyframes, std::vector<MapPoint*> points) {
   last_frame_ = frame;
   last_frame_->has_pose = true;
   velocity_.reset();
-  reference_keyframe_ = kf_cur;
-  last_keyframe_ = kf_cur;
+  reference_keyframe_ = keyframes.back();
+  last_keyframe_ = keyframes.back();
   last_keyframe_frame_id_ = frame.id;
-  local_keyframes_ = {kf_ref, kf_cur};
-  local_points_ = points;
-  keyframes_created_ = 2;
+  keyframes_created_ = static_cast<int>(keyframes.size());
+  local_keyframes_ = std::move(keyframes);
+  local_points_ = std::move(points);
   initialised_at_index_ = frame.index;
   state_ = TrackingState::Ok;
-  init_reference_.reset();
 }
 
 void Tracking::initialiseFromDepth(Frame& frame) {
@@ -328,17 +332,7 @@ void Tracking::initialiseFromDepth(Frame& frame) {
   }
   spdlog::info("map initialised at frame {} from depth with {} points", frame.index, points.size());
   local_mapping_.insertKeyFrame(keyframe);
-  last_frame_ = frame;
-  last_frame_->has_pose = true;
-  velocity_.reset();
-  reference_keyframe_ = keyframe;
-  last_keyframe_ = keyframe;
-  last_keyframe_frame_id_ = frame.id;
-  local_keyframes_ = {keyframe};
-  local_points_ = points;
-  keyframes_created_ = 1;
-  initialised_at_index_ = frame.index;
-  state_ = TrackingState::Ok;
+  startTracking(frame, {keyframe}, std::move(points));
 }
 
 MapPoint* Tracking::createPointFromDepth(KeyFrame* keyframe, size_t keypoint) {

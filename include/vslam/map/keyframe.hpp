@@ -43,6 +43,10 @@ class KeyFrame {
   Vec2 point(size_t i) const { return Vec2(points[i].x, points[i].y); }
   bool hasDepth(size_t i) const { return i < depth.size() && depth[i] > 0; }
   double rightCoordinate(size_t i) const { return hasDepth(i) ? u_right[i] : kNoRightCoordinate; }
+  // What keypoint i's observation of a map point counts for in the survival
+  // rules: 2 with depth (it fixes the point in 3D on its own, as a stereo pair
+  // does in ORB-SLAM2), else 1 (MapPoint::observationWeight).
+  int observationWeight(size_t i) const { return hasDepth(i) ? 2 : 1; }
   // The keypoint's 3D point from its depth, in world coordinates (hasDepth(i)).
   Vec3 unprojectToWorld(size_t i) const;
   // Bag of words and direct index, set once by Local Mapping when it takes the

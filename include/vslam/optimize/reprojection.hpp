@@ -40,6 +40,9 @@ constexpr double kMinPositiveDepth = 1e-6;
 inline constexpr double kNoRightCoordinate = std::numeric_limits<double>::quiet_NaN();
 inline bool hasRightCoordinate(double u_right) { return !std::isnan(u_right); }
 
+// The 95 % chi-square bound of an observation: 2 dof, or 3 with a right coordinate.
+inline double chi2Bound95(double u_right) { return hasRightCoordinate(u_right) ? kChi2Stereo : kChi2Mono; }
+
 // RGB-D observations become stereo ones: the right-image coordinate a stereo
 // rig with the same bf would have measured for a keypoint at `depth`.
 inline double rightCoordinateFromDepth(double u, double depth, double bf) { return u - bf / depth; }

@@ -25,7 +25,8 @@ class FrameBuilder {
   FrameBuilder(const Config& config, const PinholeCamera& camera, std::vector<int> dynamic_class_ids = {});
 
   // `bgr` is the colour image (or grey, CV_8UC1); `depth_m` is CV_32F metres,
-  // registered to it and of its size, or empty (no depth: a monocular frame); `n_features` < 0 means the configured number. With `detections`,
+  // registered to it and of its size, or empty (no depth: a monocular frame;
+  // a monocular config, config.sensor, ignores it); `n_features` < 0 means the configured number. With `detections`,
   // the keypoint filter (Algorithm 1) runs on the frame's own pyramid and its
   // outcome goes to `filter` (when given); without, no keypoint is labelled.
   Frame build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m = cv::Mat(),

@@ -57,7 +57,6 @@ std::vector<std::pair<int, int>> searchForTriangulation(const KeyFrame& kf1, con
 struct PredictedObservation {
   Vec2 pixel;
   int level = 0;
-  double depth = 0;  // camera z (under S_cw's scale)
 };
 std::optional<PredictedObservation> predictObservation(const MapPoint& point, const KeyFrame& keyframe,
                                                        const Sim3& S_cw, const Vec3& centre_w);

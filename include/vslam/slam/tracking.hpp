@@ -74,6 +74,9 @@ class Tracking {
  private:
   void initialise(Frame& frame);
   void initialiseFromDepth(Frame& frame);  // RGB-D: one frame, metric map
+  // After either initialisation: `frame` is the last frame, the last of
+  // `keyframes` its reference, and the keyframes and points the local map.
+  void startTracking(const Frame& frame, std::vector<KeyFrame*> keyframes, std::vector<MapPoint*> points);
   // A map point at keypoint `keypoint`'s depth, observed by `keyframe` (map lock held).
   MapPoint* createPointFromDepth(KeyFrame* keyframe, size_t keypoint);
   bool needCloseKeyFrame(const Frame& frame) const;

@@ -1,5 +1,9 @@
 // The map database's bookkeeping on hand-built keyframes and points:
 // covisibility weights, spanning tree, culling, duplicate fusion, class votes.
+#include <atomic>
+#include <chrono>
+#include <thread>
+
 #include <gtest/gtest.h>
 
 #include "vslam/map/map.hpp"
@@ -288,6 +292,49 @@ TEST_F(MapGraphTest, ConfirmedPointDiesBelowThreeObservations) {
   four->confirm(3);
   four->eraseObservation(d);
   EXPECT_FALSE(four->isBad());
+}
+
+// Loop Closing pauses Local Mapping before it corrects the map. pause() must
+// return only once every queued keyframe is linked and mapped (a keyframe left
+// in the queue would sit outside the covisibility graph and the spanning tree
+// while the map moves), and no keyframe may be taken until resume(). Before,
+// pause() returned as soon as the keyframe in hand was done, with the rest
+// still queued.
+TEST_F(MapGraphTest, LocalMappingPausesOnlyOnceItsQueueIsDrained) {
+  Config config;
+  LocalMapping local_mapping(config, map_, nullptr);
+  std::atomic<int> mapped{0};
+  local_mapping.setAfterKeyFrameHook([&](long) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(40));  // a slow keyframe: the queue fills
+    ++mapped;
+  });
+  local_mapping.start();
+  for (long id = 0; id < 4; ++id) {
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    local_mapping.insertKeyFrame(map_.createKeyFrame(makeFrame(id, 10, 0.1 * id)));
+  }
+  local_mapping.pause();
+  EXPECT_EQ(mapped.load(), 4);
+  EXPECT_EQ(local_mapping.queuedKeyFrames(), 0u);
+  EXPECT_TRUE(local_mapping.paused());
+  EXPECT_FALSE(local_mapping.acceptsKeyFrames());
+
+  // Paused: a keyframe inserted now waits in the queue until resume().
+  {
+    std::lock_guard<std::mutex> lock(map_.mutex());
+    local_mapping.insertKeyFrame(map_.createKeyFrame(makeFrame(4, 10, 0.4)));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  EXPECT_EQ(mapped.load(), 4);
+  EXPECT_EQ(local_mapping.queuedKeyFrames(), 1u);
+  EXPECT_FALSE(local_mapping.acceptsKeyFrames());
+
+  local_mapping.resume();
+  local_mapping.waitUntilIdle();
+  EXPECT_EQ(mapped.load(), 5);
+  EXPECT_FALSE(local_mapping.paused());
+  EXPECT_TRUE(local_mapping.acceptsKeyFrames());
+  local_mapping.finish();
 }
 
 }  // namespace

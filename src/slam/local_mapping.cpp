@@ -198,6 +198,8 @@ void LocalMapping::run() {
         queue_.clear();
       }
       linked_count_ = inserted_count_ - static_cast<long>(queue_.size());  // as markLinked(): done, linked or not
+      // Idle from here: say so before waiters of waitUntilIdle() wake up.
+      if (queue_.empty() && !paused_ && !pause_requested_) accepting_.store(true);
     }
     queue_cv_.notify_all();
     if (failure) return;

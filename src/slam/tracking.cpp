@@ -87,7 +87,10 @@ bool Tracking::track(Frame& frame) {
   refreshLastFramePose();
   bool ok = false;
   if (state_ == TrackingState::Ok) {
-    if (velocity_ && last_frame_) ok = trackWithMotionModel(frame);
+    if (velocity_ && last_frame_) {
+      ok = trackWithMotionModel(frame);
+      if (!ok) ++motion_model_misses_;
+    }
     if (!ok) ok = trackReferenceKeyFrame(frame);
   } else {
     // Lost: relocalise against the whole map by place recognition; without a

@@ -61,6 +61,8 @@ class Tracking {
   void setLoopClosing(LoopClosing* loop_closing) { loop_closing_ = loop_closing; }
   int mapResets() const { return map_resets_; }
   int keyframeWaits() const { return keyframe_waits_; }  // keyframes that waited for Local Mapping
+  // Frames the constant-velocity model failed to track (the reference keyframe was tried instead).
+  int motionModelMisses() const { return motion_model_misses_; }
 
   // Tracks one frame; returns true when its pose is known.
   bool track(Frame& frame);
@@ -123,6 +125,7 @@ class Tracking {
   int relocalisations_ = 0;
   int map_resets_ = 0;
   int keyframe_waits_ = 0;
+  int motion_model_misses_ = 0;
   bool last_keyframe_was_weak_ = false;  // made with fewer than min_tracked_points tracked
 };
 

@@ -1,0 +1,95 @@
+// Tracking on its own (no System): a deterministic map of the rendered room,
+// with Local Mapping run synchronously after each keyframe.
+#include <memory>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "vslam/map/map.hpp"
+#include "vslam/render/room_loop.hpp"
+#include "vslam/slam/frame_builder.hpp"
+#include "vslam/slam/local_mapping.hpp"
+#include "vslam/slam/tracking.hpp"
+
+namespace vslam {
+namespace {
+
+struct TrackedRoom {
+  explicit TrackedRoom(const Config& config)
+      : builder(config, config.camera),
+        local_mapping(config, map, nullptr),
+        tracking(config, map, local_mapping, nullptr, KeyFrameInsertion::Synchronous) {}
+
+  bool track(long id, const cv::Mat& image) {
+    // Monocular initialisation extracts twice the features, as System does.
+    const int n_features = tracking.state() == TrackingState::NotInitialized ? 2 * builder.extractor().params().n_features : -1;
+    last = builder.build(id, static_cast<int>(id), 0.1 * static_cast<double>(id), image, cv::Mat(), n_features);
+    return tracking.track(last);
+  }
+
+  Map map;
+  FrameBuilder builder;
+  LocalMapping local_mapping;
+  Tracking tracking;
+  Frame last;
+};
+
+// Moves the whole map into another world frame: p' = G p, T_cw' = T_cw G^-1,
+// as a loop correction or a local BA moves the keyframes under Tracking.
+void moveWorld(Map& map, const SE3& G) {
+  std::lock_guard<std::mutex> lock(map.mutex());
+  for (KeyFrame* keyframe : map.keyframes()) keyframe->setPose(keyframe->pose() * G.inverse());
+  for (MapPoint* point : map.mapPoints()) point->setPosition(G * point->position());
+  for (MapPoint* point : map.mapPoints())
+    if (point->reference() && !point->reference()->isBad()) point->updateNormalAndDepth(point->reference()->pyramid());
+}
+
+// The constant-velocity model predicts the next pose from the last frame's.
+// That pose must be re-derived from the last frame's reference keyframe before
+// each frame, so that a correction of the map (local BA, a loop) reaches the
+// prediction. Before, the last frame kept the pose it was tracked with: after
+// the map moved, the prediction pointed into the old map, the projection
+// search found nothing and tracking fell back to the reference keyframe.
+TEST(TrackingMotionModel, PredictionFollowsAMapCorrection) {
+  RoomLoopParams room;
+  room.frames = 500;
+  const std::vector<StampedPose> path = roomLoopPath(room);
+  constexpr long kFramesBeforeMove = 40;
+  std::vector<cv::Mat> images;
+  {
+    RoomLoopRenderer renderer(room);
+    for (long k = 0; k <= kFramesBeforeMove; ++k) images.push_back(renderer.render(path[k].T_wc).clone());
+  }
+  Config config;
+  config.camera = room.camera;
+  config.detector.model = "none";
+  config.loop.vocabulary.clear();
+
+  TrackedRoom moved(config), still(config);
+  for (long k = 0; k < kFramesBeforeMove; ++k) {
+    moved.track(k, images[k]);
+    still.track(k, images[k]);
+  }
+  ASSERT_EQ(moved.tracking.state(), TrackingState::Ok);
+  ASSERT_EQ(still.tracking.state(), TrackingState::Ok);
+  const int misses_before = moved.tracking.motionModelMisses();
+
+  // Half a unit of map scale (the map's median depth is about 1) and 10 degrees:
+  // projections from the stale pose would miss by hundreds of pixels.
+  SE3 G;
+  G.R = Eigen::AngleAxisd(0.17, Vec3(0, 1, 0)).toRotationMatrix();
+  G.t = Vec3(0.5, -0.2, 0.3);
+  moveWorld(moved.map, G);
+
+  ASSERT_TRUE(moved.track(kFramesBeforeMove, images[kFramesBeforeMove]));
+  ASSERT_TRUE(still.track(kFramesBeforeMove, images[kFramesBeforeMove]));
+  EXPECT_EQ(moved.tracking.motionModelMisses(), misses_before);
+  EXPECT_EQ(moved.tracking.motionModelMisses(), still.tracking.motionModelMisses());
+  // The same frame in the moved world: T_cw' = T_cw G^-1.
+  const SE3 expected = still.last.T_cw * G.inverse();
+  EXPECT_LT((moved.last.T_cw.t - expected.t).norm(), 1e-3);
+  EXPECT_LT(Eigen::AngleAxisd(moved.last.T_cw.R.transpose() * expected.R).angle(), 1e-3);
+}
+
+}  // namespace
+}  // namespace vslam

@@ -105,15 +105,19 @@ TEST(SlamThreaded, CirclingARoomClosesAVerifiedLoopEveryRun) {
   }
 }
 
-// KNOWN TO FAIL, disabled until fixed (issue 12, open): threaded runs of the
-// room loop gave keyframe ATE 0.43-2.1 cm in eight runs, and once 17.7 cm on a
-// heavily loaded machine, although the loop found was the right one; the
-// deterministic run gives 0.9 cm. Run with --gtest_also_run_disabled_tests.
-TEST(SlamThreaded, DISABLED_CirclingARoomKeepsTheDeterministicAccuracy) {
+// The room loop's accuracy, threaded. At 4525ce0 threaded runs gave keyframe
+// ATE 0.43-2.4 cm and once 17.7 cm on a loaded machine (deterministic: 0.9 cm).
+// Since Local Mapping pauses only with its queue drained and Tracking waits for
+// the mapping of weak-tracking keyframes, 15 threaded runs at 42d545b, under a
+// load average of 7-9.5 (stress-ng and parallel builds), all gave 0.56-0.57 cm
+// with the same loop (docs/BENCHMARKS.md): the bound is that with a margin.
+TEST(SlamThreaded, CirclingARoomKeepsItsAccuracy) {
   RoomLoopParams room;
   const std::vector<StampedPose> path = roomLoopPath(room);
-  for (const RoomRun& run : runRoomLoopThreaded(room, path, 3))
-    EXPECT_LT(run.keyframe_ate, 0.015) << "keyframe ATE " << run.keyframe_ate;
+  for (const RoomRun& run : runRoomLoopThreaded(room, path, 2)) {
+    EXPECT_EQ(run.loops.size(), 1u);
+    EXPECT_LT(run.keyframe_ate, 0.010) << "keyframe ATE " << run.keyframe_ate;
+  }
 }
 
 // Regression: a map reset after early loss left Loop Closing with the old

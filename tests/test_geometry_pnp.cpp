@@ -1,3 +1,5 @@
+#include <algorithm>
+#include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -93,4 +95,29 @@ TEST(GeometryPnp, FailsBelowMinInliers) {
 }
 
 }  // namespace
+// ORB-SLAM2's threshold grows with the keypoint's pyramid level: chi-square
+// 5.991 sigma^2 with sigma = 1.2^level. A match 3 px off is an outlier for a
+// level-0 keypoint (threshold 2.45 px) and an inlier at level 3 (4.23 px).
+TEST(GeometryPnp, ThresholdScalesWithThePyramidLevel) {
+  PnpScene scene = makePnpScene(100, 0.0, 0.0, 5);
+  std::vector<double> sigma(scene.pixels.size(), 1.0);
+  for (size_t i = 0; i < scene.pixels.size(); i += 10) {
+    scene.pixels[i] += Vec2(3.0, 0.0);
+    if (i % 20 == 0) sigma[i] = std::pow(1.2, 3);  // 5 of the 10 displaced keypoints are coarse
+  }
+  const PnpResult fixed = solvePnpRansac(scene.points_w, scene.pixels, test::syntheticK(), 300, std::sqrt(5.991), 30, 0);
+  const PnpResult scaled =
+      solvePnpRansac(scene.points_w, scene.pixels, test::syntheticK(), 300, std::sqrt(5.991), 30, 0, sigma);
+  ASSERT_TRUE(fixed.success);
+  ASSERT_TRUE(scaled.success);
+  EXPECT_EQ(fixed.inliers.size(), 90u);
+  EXPECT_EQ(scaled.inliers.size(), 95u);
+  for (size_t i = 0; i < scene.pixels.size(); i += 10) {
+    const bool kept = std::binary_search(scaled.inliers.begin(), scaled.inliers.end(), static_cast<int>(i));
+    EXPECT_EQ(kept, i % 20 == 0) << "match " << i;
+  }
+  // A sigma per match or none.
+  EXPECT_FALSE(solvePnpRansac(scene.points_w, scene.pixels, test::syntheticK(), 300, 2.45, 30, 0, {1.0, 1.0}).success);
+}
+
 }  // namespace vslam

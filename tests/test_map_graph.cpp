@@ -7,7 +7,9 @@
 #include <gtest/gtest.h>
 
 #include "vslam/map/map.hpp"
+#include "vslam/place/keyframe_database.hpp"
 #include "vslam/slam/local_mapping.hpp"
+#include "vslam/slam/place_candidates.hpp"
 
 namespace vslam {
 namespace {
@@ -335,6 +337,51 @@ TEST_F(MapGraphTest, LocalMappingPausesOnlyOnceItsQueueIsDrained) {
   EXPECT_FALSE(local_mapping.paused());
   EXPECT_TRUE(local_mapping.acceptsKeyFrames());
   local_mapping.finish();
+}
+
+// ORB-SLAM2's place-recognition candidates (relocalisation and loop
+// detection), on hand-made bags of words scored against a query of words 1-10
+// at 0.1 each. B alone scores best (0.9); A1, A2, A3 see one place together
+// (0.72, 0.72, 0.81: 2.25 as a group); C scores 0.5 but shares only 5 words,
+// under 80 % of the 9 the best share. The group wins, represented by its best
+// member A3; B's 0.9 is under 75 % of 2.25. Relocalisation used to try the 10
+// best single scores: B first.
+TEST_F(MapGraphTest, PlaceCandidatesAreTheBestCovisibilityGroups) {
+  auto bagOf = [](double per_word, int words, WordId own_word) {
+    BowVector bow;
+    for (int w = 1; w <= words; ++w) bow[w] = per_word;
+    bow[own_word] = 1.0 - per_word * words;
+    return bow;
+  };
+  KeyframeDatabase database;
+  auto addKeyFrame = [&](long id, const BowVector& bow) {
+    KeyFrame* keyframe = map_.createKeyFrame(makeFrame(id, 100, 0.1 * id));
+    keyframe->bow = bow;
+    keyframe->bow_features[0].push_back(0);
+    database.add(keyframe->id(), bow);
+    return keyframe;
+  };
+  KeyFrame* b = addKeyFrame(0, bagOf(0.1, 9, 200));
+  KeyFrame* a1 = addKeyFrame(1, bagOf(0.08, 9, 100));
+  KeyFrame* a2 = addKeyFrame(2, bagOf(0.08, 9, 101));
+  KeyFrame* a3 = addKeyFrame(3, bagOf(0.09, 9, 102));
+  KeyFrame* c = addKeyFrame(4, bagOf(0.2, 5, 103));
+  for (int i = 0; i < 30; ++i) observe({a1, a2, a3}, i);
+  for (KeyFrame* keyframe : {b, a1, a2, a3, c}) keyframe->updateConnections();
+  ASSERT_EQ(a1->weight(a3), 30);
+
+  const BowVector query = bagOf(0.1, 10, 300);
+  EXPECT_EQ(selectPlaceCandidates(database, map_, query, {}, 0.0), std::vector<KeyFrame*>{a3});
+  // Without the group rule B would be kept; without the shared-words rule, C too.
+  PlaceCandidateRule loose;
+  loose.min_group_score_ratio = 0.0;
+  loose.min_shared_words_ratio = 0.0;
+  const std::vector<KeyFrame*> all = selectPlaceCandidates(database, map_, query, {}, 0.0, loose);
+  EXPECT_EQ(all.size(), 3u);  // B, C and the A group (A3 for all three members)
+  // A minimum score and exclusions apply before grouping. Without A3, A1 and
+  // A2 tie within their group (1.44), and each represents its own.
+  EXPECT_EQ(selectPlaceCandidates(database, map_, query, {a3->id()}, 0.0), (std::vector<KeyFrame*>{a1, a2}));
+  EXPECT_EQ(selectPlaceCandidates(database, map_, query, {}, 0.85), std::vector<KeyFrame*>{b});
 }
 
 }  // namespace

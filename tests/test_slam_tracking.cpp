@@ -91,5 +91,22 @@ TEST(TrackingMotionModel, PredictionFollowsAMapCorrection) {
   EXPECT_LT(Eigen::AngleAxisd(moved.last.T_cw.R.transpose() * expected.R).angle(), 1e-3);
 }
 
+// ORB-SLAM2's rules after a relocalisation at frame 100.
+TEST(TrackingAfterRelocalisation, TheNextFrameIsTrackedFromItsReferenceKeyFrame) {
+  EXPECT_TRUE(motionModelAllowed(5, -1));  // never relocalised
+  EXPECT_FALSE(motionModelAllowed(100, 100));
+  EXPECT_FALSE(motionModelAllowed(101, 100));
+  EXPECT_TRUE(motionModelAllowed(102, 100));
+}
+
+TEST(TrackingAfterRelocalisation, NoKeyFrameUntilTheRelocalisedPoseHasHeld) {
+  EXPECT_TRUE(keyFrameAllowedAfterRelocalisation(5, -1, 20, 50));
+  EXPECT_FALSE(keyFrameAllowedAfterRelocalisation(100, 100, 20, 50));
+  EXPECT_FALSE(keyFrameAllowedAfterRelocalisation(119, 100, 20, 50));
+  EXPECT_TRUE(keyFrameAllowedAfterRelocalisation(120, 100, 20, 50));
+  EXPECT_TRUE(keyFrameAllowedAfterRelocalisation(101, 100, 20, 20));  // a small map still grows
+  EXPECT_FALSE(keyFrameAllowedAfterRelocalisation(101, 100, 20, 21));
+}
+
 }  // namespace
 }  // namespace vslam

@@ -33,14 +33,16 @@ void poseToCv(const SE3& T, cv::Mat& rvec, cv::Mat& tvec) {
 
 // Inliers of a pose and their summed squared error (to break ties).
 std::vector<int> findInliers(const SE3& T_cw, const std::vector<Vec3>& points_w, const std::vector<Vec2>& pixels,
-                             const Mat3& K, double max_error2, double* total_error2) {
+                             const std::vector<double>& pixel_sigma, const Mat3& K, double max_error2,
+                             double* total_error2) {
   std::vector<int> inliers;
   double total = 0;
   for (size_t i = 0; i < points_w.size(); ++i) {
     const Vec3 p_c = T_cw * points_w[i];
     if (!(p_c.z() > 0)) continue;
     const double error2 = ((K * p_c).hnormalized() - pixels[i]).squaredNorm();
-    if (error2 < max_error2) {
+    const double sigma = pixel_sigma.empty() ? 1.0 : pixel_sigma[i];
+    if (error2 < max_error2 * sigma * sigma) {
       inliers.push_back(static_cast<int>(i));
       total += error2;
     }
@@ -68,10 +70,12 @@ SE3 refinePose(const SE3& T, const std::vector<Vec3>& points_w, const std::vecto
 }  // namespace
 
 PnpResult solvePnpRansac(const std::vector<Vec3>& points_w, const std::vector<Vec2>& pixels, const Mat3& K,
-                         int iterations, double reproj_px, int min_inliers, uint32_t seed) {
+                         int iterations, double reproj_px, int min_inliers, uint32_t seed,
+                         const std::vector<double>& pixel_sigma) {
   PnpResult result;
   const int n = static_cast<int>(points_w.size());
   if (n < kSampleSize || pixels.size() != points_w.size()) return result;
+  if (!pixel_sigma.empty() && pixel_sigma.size() != points_w.size()) return result;
   cv::Mat K_cv;
   cv::eigen2cv(K, K_cv);
   const double max_error2 = reproj_px * reproj_px;
@@ -98,7 +102,7 @@ PnpResult solvePnpRansac(const std::vector<Vec3>& points_w, const std::vector<Ve
     const SE3 pose = poseFromCv(rvec, tvec);
     if (!pose.R.allFinite() || !pose.t.allFinite()) continue;
     double error2 = 0;
-    std::vector<int> inliers = findInliers(pose, points_w, pixels, K, max_error2, &error2);
+    std::vector<int> inliers = findInliers(pose, points_w, pixels, pixel_sigma, K, max_error2, &error2);
     if (inliers.size() > best_inliers.size() || (inliers.size() == best_inliers.size() && error2 < best_error2)) {
       best_inliers = std::move(inliers);
       best_error2 = error2;
@@ -118,7 +122,7 @@ PnpResult solvePnpRansac(const std::vector<Vec3>& points_w, const std::vector<Ve
   std::vector<int> inliers = best_inliers;
   for (int round = 0; round < 2; ++round) {
     pose = refinePose(pose, points_w, pixels, inliers, K_cv);
-    inliers = findInliers(pose, points_w, pixels, K, max_error2, nullptr);
+    inliers = findInliers(pose, points_w, pixels, pixel_sigma, K, max_error2, nullptr);
     if (static_cast<int>(inliers.size()) < kSampleSize) return result;
   }
   result.T_cw = pose;

@@ -14,6 +14,7 @@
 #include "vslam/optimize/pose_graph.hpp"
 #include "vslam/slam/local_mapping.hpp"
 #include "vslam/slam/map_matching.hpp"
+#include "vslam/slam/place_candidates.hpp"
 
 namespace vslam {
 namespace {
@@ -70,6 +71,28 @@ int searchLoopByProjection(const KeyFrame& current, const Sim3& S_cw, const std:
 }
 
 }  // namespace
+
+std::vector<size_t> updateConsistentGroups(std::vector<ConsistentGroup>& groups,
+                                           const std::vector<std::set<long>>& candidate_groups, int threshold) {
+  std::vector<size_t> accepted;
+  std::vector<ConsistentGroup> next_groups;
+  for (size_t c = 0; c < candidate_groups.size(); ++c) {
+    ConsistentGroup group{candidate_groups[c], 0};
+    for (const ConsistentGroup& previous : groups) {
+      const bool overlaps = std::any_of(group.keyframe_ids.begin(), group.keyframe_ids.end(),
+                                        [&](long id) { return previous.keyframe_ids.count(id) > 0; });
+      if (overlaps) group.consistency = std::max(group.consistency, previous.consistency + 1);
+    }
+    if (group.consistency >= threshold) accepted.push_back(c);
+    next_groups.push_back(std::move(group));
+  }
+  groups = std::move(next_groups);
+  return accepted;
+}
+
+bool loopLinkEntersEssentialGraph(int covisibility_weight, bool is_the_loop_link, int min_weight) {
+  return is_the_loop_link || covisibility_weight >= min_weight;
+}
 
 bool loopAccepted(double scale, int inliers, const LoopScaleRule& rule) {
   if (!(scale > 0)) return false;
@@ -385,62 +408,20 @@ std::vector<KeyFrame*> LoopClosing::detectCandidates(KeyFrame* current) {
   std::unordered_set<long> exclude = {current->id()};
   for (KeyFrame* neighbour : neighbours) exclude.insert(neighbour->id());
 
-  // Candidates: enough shared words (80 % of the best) and a score above the minimum.
-  const auto shared = database_.sharedWordCounts(current->bow, exclude);
-  int max_shared = 0;
-  for (const auto& [id, count] : shared) max_shared = std::max(max_shared, count);
-  std::vector<std::pair<KeyFrame*, double>> scored;
-  for (const auto& [id, score] : database_.query(current->bow, min_score, exclude, 0)) {
-    auto it = shared.find(id);
-    if (it == shared.end() || it->second < 0.8 * max_shared) continue;
-    KeyFrame* kf = map_.keyFrameById(id);
-    if (kf && !kf->isBad() && kf->hasBow()) scored.emplace_back(kf, score);
-  }
-  // Group each candidate with its best covisibles; keep groups scoring >= 75 % of the best.
-  KeyFrameMap<double> score_of;
-  for (const auto& [kf, score] : scored) score_of[kf] = score;
-  std::vector<std::pair<KeyFrame*, double>> groups;  // best keyframe of the group, accumulated score
-  double best_group = 0;
-  for (const auto& [kf, score] : scored) {
-    double accumulated = score;
-    KeyFrame* best = kf;
-    double best_score = score;
-    for (KeyFrame* neighbour : kf->bestCovisibles(10)) {
-      auto it = score_of.find(neighbour);
-      if (it == score_of.end()) continue;
-      accumulated += it->second;
-      if (it->second > best_score) {
-        best_score = it->second;
-        best = neighbour;
-      }
-    }
-    groups.emplace_back(best, accumulated);
-    best_group = std::max(best_group, accumulated);
-  }
-  std::vector<KeyFrame*> accepted;
-  KeyFrameSet seen;
-  for (const auto& [kf, accumulated] : groups)
-    if (accumulated >= 0.75 * best_group && seen.insert(kf).second) accepted.push_back(kf);
+  // Candidates: enough shared words, a score above the minimum, the best covisibility groups.
+  const std::vector<KeyFrame*> accepted = selectPlaceCandidates(database_, map_, current->bow, exclude, min_score);
 
-  // Consistency: a candidate's group must overlap a group of the previous keyframe's candidates.
-  std::vector<ConsistentGroup> next_groups;
+  // Consistency: a candidate's group must overlap groups of the previous keyframes' candidates.
+  std::vector<std::set<long>> candidate_groups;
   for (KeyFrame* candidate : accepted) {
-    ConsistentGroup group;
-    group.keyframe_ids.insert(candidate->id());
-    for (KeyFrame* neighbour : candidate->orderedCovisibles()) group.keyframe_ids.insert(neighbour->id());
-    int consistency = 1;
-    for (const ConsistentGroup& previous : consistent_groups_) {
-      const bool overlaps = std::any_of(group.keyframe_ids.begin(), group.keyframe_ids.end(),
-                                        [&](long id) { return previous.keyframe_ids.count(id) > 0; });
-      if (overlaps) consistency = std::max(consistency, previous.consistency + 1);
-    }
-    group.consistency = consistency;
-    if (consistency >= config_.loop.consistency) result.push_back(candidate);
-    next_groups.push_back(std::move(group));
+    std::set<long> group = {candidate->id()};
+    for (KeyFrame* neighbour : candidate->orderedCovisibles()) group.insert(neighbour->id());
+    candidate_groups.push_back(std::move(group));
   }
-  consistent_groups_ = std::move(next_groups);
-  spdlog::debug("loop detection, keyframe {}: {} covisible (excluded), min score {:.3f}, {} scored, {} grouped, {} consistent",
-                current->id(), neighbours.size(), min_score, scored.size(), accepted.size(), result.size());
+  for (size_t index : updateConsistentGroups(consistent_groups_, candidate_groups, config_.loop.consistency))
+    result.push_back(accepted[index]);
+  spdlog::debug("loop detection, keyframe {}: {} covisible (excluded), min score {:.3f}, {} candidates, {} consistent",
+                current->id(), neighbours.size(), min_score, accepted.size(), result.size());
   return result;
 }
 
@@ -644,9 +625,11 @@ bool LoopClosing::correctLoop(KeyFrame* current, LoopCandidate& loop) {
   // The relative measurement before correction (what the map measured), except for
   // the new loop links, which come from the corrected poses.
   auto measured = [&](KeyFrame* from, KeyFrame* to) { return uncorrected[to] * uncorrected[from].inverse(); };
-  for (const auto& [kf, others] : new_links)
-    for (KeyFrame* other : others) addEdge(kf, other, correctedRelative(kf, other), 1.0);
   addEdge(current, loop.matched, correctedRelative(current, loop.matched), 1.0);
+  for (const auto& [kf, others] : new_links)
+    for (KeyFrame* other : others)
+      if (loopLinkEntersEssentialGraph(kf->weight(other), false, kEssentialCovisibilityWeight))
+        addEdge(kf, other, correctedRelative(kf, other), 1.0);
   for (KeyFrame* kf : keyframes) {
     if (KeyFrame* parent = kf->parent()) addEdge(kf, parent, measured(kf, parent), 1.0);
     for (KeyFrame* other : kf->loopEdges()) addEdge(kf, other, measured(kf, other), 1.0);

@@ -1,6 +1,7 @@
 #include "vslam/slam/tracking.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 
 #include <opencv2/calib3d.hpp>
@@ -17,6 +18,7 @@
 #include "vslam/slam/local_mapping.hpp"
 #include "vslam/slam/loop_closing.hpp"
 #include "vslam/slam/map_matching.hpp"
+#include "vslam/slam/place_candidates.hpp"
 
 namespace vslam {
 namespace {
@@ -32,11 +34,20 @@ constexpr double kInitWindowPx = 100.0;
 constexpr double kProjectionRadiusPx = 15.0;  // monocular search window around the predicted position
 constexpr size_t kMaxLocalKeyFrames = 80;
 constexpr size_t kResetMaxKeyFrames = 3;       // lost with this many keyframes or fewer: start again
-constexpr size_t kRelocCandidates = 10;        // best-scoring keyframes tried
 constexpr int kRelocMinBowMatches = 15;
 constexpr int kRelocMinInliers = 50;
 
 }  // namespace
+
+bool motionModelAllowed(long frame_id, long last_relocalisation) {
+  return last_relocalisation < 0 || frame_id >= last_relocalisation + 2;
+}
+
+bool keyFrameAllowedAfterRelocalisation(long frame_id, long last_relocalisation, int max_frames,
+                                        size_t keyframes_in_map) {
+  if (last_relocalisation < 0 || frame_id >= last_relocalisation + max_frames) return true;
+  return keyframes_in_map <= static_cast<size_t>(max_frames);
+}
 
 Tracking::Tracking(const Config& config, Map& map, LocalMapping& local_mapping, StageTimer* timer,
                    KeyFrameInsertion insertion)
@@ -87,7 +98,7 @@ bool Tracking::track(Frame& frame) {
   refreshLastFramePose();
   bool ok = false;
   if (state_ == TrackingState::Ok) {
-    if (velocity_ && last_frame_) {
+    if (velocity_ && last_frame_ && motionModelAllowed(frame.id, last_relocalisation_frame_id_)) {
       ok = trackWithMotionModel(frame);
       if (!ok) ++motion_model_misses_;
     }
@@ -424,25 +435,25 @@ bool Tracking::relocalise(Frame& frame) {
   BowVector bow;
   FeatureVector features;
   vocabulary_->transform(frame.descriptors, bow, features);
-  const auto candidates = database_->query(bow, 0.0, {}, kRelocCandidates);
-  for (const auto& [keyframe_id, score] : candidates) {
-    KeyFrame* keyframe = map_.keyFrameById(keyframe_id);
-    if (!keyframe || keyframe->isBad() || !keyframe->hasBow()) continue;
+  for (KeyFrame* keyframe : selectPlaceCandidates(*database_, map_, bow, {}, 0.0)) {
     std::vector<MapPoint*> matches;
     if (searchByBoW(*keyframe, frame, features, matches) < kRelocMinBowMatches) continue;
 
     // PnP with RANSAC on the BoW matches (seeded by the keyframe: deterministic).
+    // The inlier threshold is chi-square 5.991 at the keypoint's scale, as ORB-SLAM2's.
     std::vector<Vec3> points_w;
     std::vector<Vec2> pixels;
+    std::vector<double> pixel_sigma;
     std::vector<int> keypoint_of;
     for (size_t i = 0; i < matches.size(); ++i) {
       if (!matches[i]) continue;
       points_w.push_back(matches[i]->position());
       pixels.push_back(frame.point(i));
+      pixel_sigma.push_back(frame.pyramid->scale[frame.keypoints[i].octave]);
       keypoint_of.push_back(static_cast<int>(i));
     }
-    const PnpResult pnp = solvePnpRansac(points_w, pixels, frame.camera->Keigen(), 300, 2.4477, 10,
-                                         static_cast<uint32_t>(keyframe_id));
+    const PnpResult pnp = solvePnpRansac(points_w, pixels, frame.camera->Keigen(), 300, std::sqrt(5.991), 10,
+                                         static_cast<uint32_t>(keyframe->id()), pixel_sigma);
     if (!pnp.success) continue;
     const SE3 T_cw = pnp.T_cw;
     const std::vector<int>& inliers = pnp.inliers;
@@ -566,6 +577,9 @@ bool Tracking::needNewKeyFrame(const Frame& frame) const {
   if (!reference_keyframe_) return false;
   const TrackingParams& params = config_.tracking;
   const int keyframes_in_map = static_cast<int>(map_.keyframeCount());
+  if (!keyFrameAllowedAfterRelocalisation(frame.id, last_relocalisation_frame_id_, params.max_frames_between_keyframes,
+                                          static_cast<size_t>(keyframes_in_map)))
+    return false;
   const int min_observations = keyframes_in_map <= 2 ? 2 : 3;
   const int reference_points = reference_keyframe_->trackedMapPoints(min_observations);
   const long frames_since = frame.id - last_keyframe_frame_id_;

@@ -76,6 +76,28 @@ struct LoopScaleRule {
 };
 bool loopAccepted(double scale, int inliers, const LoopScaleRule& rule = {});
 
+// ORB-SLAM2's covisibility consistency. Each loop candidate of a keyframe
+// comes with its group (itself and its covisible keyframes). A group that
+// overlaps no group of the previous keyframe's candidates starts at
+// consistency 0; one that overlaps takes the highest overlapping consistency
+// plus 1. A candidate is accepted once its consistency reaches `threshold`
+// (3): 3 consistent detections after the first, so 4 consecutive keyframes.
+struct ConsistentGroup {
+  std::set<long> keyframe_ids;
+  int consistency = 0;
+};
+// Replaces `groups` (the previous keyframe's) by the candidates' groups and
+// returns the indices of the accepted candidates.
+std::vector<size_t> updateConsistentGroups(std::vector<ConsistentGroup>& groups,
+                                           const std::vector<std::set<long>>& candidate_groups, int threshold);
+
+// The essential graph takes a link that loop fusion created only when the two
+// keyframes share at least `min_weight` map points (ORB-SLAM2's 100, as for
+// covisibility edges): a weak new link measures little and would pull the
+// corrected side with the weight of a strong one. The link between the
+// current and the matched keyframe, the loop itself, always enters.
+bool loopLinkEntersEssentialGraph(int covisibility_weight, bool is_the_loop_link, int min_weight = 100);
+
 // What Loop Closing holds between keyframes (for tests and reports).
 struct LoopClosingState {
   size_t queued = 0;
@@ -109,10 +131,6 @@ class LoopClosing {
   std::vector<LoopRecord> loops() const;
 
  private:
-  struct ConsistentGroup {
-    std::set<long> keyframe_ids;
-    int consistency = 0;
-  };
   struct LoopCandidate {
     KeyFrame* matched = nullptr;
     Sim3 S_cw;                            // corrected similarity of the current keyframe

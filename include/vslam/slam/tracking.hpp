@@ -35,6 +35,16 @@ enum class KeyFrameInsertion {
   DropWhenBusy,
 };
 
+// ORB-SLAM2's rules after a relocalisation, by frame id (`last_relocalisation`
+// < 0: none yet). The frame right after one is tracked from its reference
+// keyframe: a velocity measured across a relocalisation means nothing.
+bool motionModelAllowed(long frame_id, long last_relocalisation);
+// No keyframe for `max_frames` frames after a relocalisation while the map
+// holds more than `max_frames` keyframes: the relocalised pose must hold
+// before the map grows from it (a small map may still need keyframes).
+bool keyFrameAllowedAfterRelocalisation(long frame_id, long last_relocalisation, int max_frames,
+                                        size_t keyframes_in_map);
+
 // What became of one frame, kept for the trajectory: its pose relative to its
 // reference keyframe, so later keyframe corrections carry over.
 struct FrameRecord {

@@ -181,6 +181,7 @@ struct Fr1Run {
   std::vector<StampedPose> frames, keyframes;
   std::vector<int> lost;
   SystemStats stats;
+  size_t loops = 0;
 };
 
 Fr1Run runFr1(const Sequence& sequence, SensorMode sensor, bool deterministic, size_t count,
@@ -197,7 +198,8 @@ Fr1Run runFr1(const Sequence& sequence, SensorMode sensor, bool deterministic, s
                         with_depth ? sequence.loadDepthMeters(i, colour.size()) : cv::Mat());
   }
   system.finish();
-  return {system.frameTrajectory(), system.keyframeTrajectory(), system.lostFrameIndices(), system.stats()};
+  return {system.frameTrajectory(), system.keyframeTrajectory(), system.lostFrameIndices(), system.stats(),
+          system.loops().size()};
 }
 
 // The whole of fr1_xyz with depth, threaded and deterministic: every frame
@@ -221,6 +223,7 @@ TEST(SlamRgbd, Fr1XyzTracksEveryFrameWithDepthAtMetricScale) {
     EXPECT_LT(keyframes.rmse_m, 0.012);
     EXPECT_LT(frames.rmse_m, 0.012);
     EXPECT_NEAR(ate(run.keyframes, sequence.groundtruth, Alignment::Sim3).scale, 1.0, 0.02);
+    EXPECT_EQ(run.loops, 0u) << "fr1_xyz never leaves its local map: a loop closed there is false";
   }
 }
 
@@ -235,6 +238,7 @@ TEST(SlamRgbd, Fr3TeddyIsTrackedAccuratelyAtMetricScale) {
   EXPECT_EQ(run.stats.frames_tracked, 200);
   EXPECT_LT(ate(run.keyframes, sequence.groundtruth, Alignment::SE3).rmse_m, 0.0105);
   EXPECT_NEAR(ate(run.keyframes, sequence.groundtruth, Alignment::Sim3).scale, 1.0, 0.013);
+  EXPECT_EQ(run.loops, 0u) << "no place is left and revisited in these 200 frames: a loop closed there is false";
 }
 
 // Depth must change the run: the same frames in mono and RGB-D give other

@@ -5,6 +5,7 @@
 // status, and keeps what it computed.
 #include <sys/wait.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -283,6 +284,45 @@ TEST(ReliabilityData, IncompleteNamedSequenceIsFlaggedAndFrameAteStillComputed) 
   ASSERT_EQ(plain.exit_code, 0) << plain.err;
   EXPECT_FALSE(contains(plain.err, "of the sequence's")) << plain.err;
   EXPECT_TRUE(nlohmann::json::parse(slurp(dir / "plain" / "report.json"))["frames_expected"].is_null());
+}
+
+// A KITTI folder with the real times.txt rhythm (0.1036224 s a frame; the
+// shared copy's is a nominal 0.1 s): the run's RPE over 1 s finds its pairs.
+// Before, it found none and reported trans_rmse 0.0, a perfect score for nothing.
+TEST(ReliabilityData, KittiWithRealTimestampsHasAnRpe) {
+  const fs::path dir = test::scratchDir("reliability_kitti_times");
+  const fs::path kitti = test::sharedData() / "kitti";
+  const fs::path sequence = dir / "sequences" / "00";
+  fs::create_directories(sequence / "image_0");
+  fs::create_directories(dir / "poses");
+  std::ofstream times(sequence / "times.txt");
+  std::ifstream all_poses(kitti / "poses" / "00.txt");
+  std::ofstream poses(dir / "poses" / "00.txt");
+  for (int k = 0; k < 60; ++k) {
+    char name[16];
+    std::snprintf(name, sizeof(name), "%06d.jpg", k);
+    fs::create_symlink(kitti / "sequences" / "00" / "image_0" / name, sequence / "image_0" / name);
+    char stamp[32];
+    std::snprintf(stamp, sizeof(stamp), "%e", k * 0.1036224);
+    times << stamp << "\n";
+    std::string line;
+    std::getline(all_poses, line);
+    poses << line << "\n";
+  }
+  times.close();
+  poses.close();
+  fs::copy_file(kitti / "sequences" / "00" / "calib.txt", sequence / "calib.txt");
+
+  const Outcome run = vslam("run --seq " + quoted(sequence.string()) +
+                                " --detector none --deterministic --no-render --out " + quoted((dir / "run").string()),
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir / "run" / "report.json"));
+  ASSERT_TRUE(report["rpe"].is_object()) << report.dump(2);
+  const nlohmann::json& rpe = report["rpe"]["frames"];
+  ASSERT_TRUE(rpe.is_object()) << report["rpe"];
+  EXPECT_GE(rpe["pairs"].get<int>(), 20) << rpe;  // 44 tracked frames here, each 10 frames (1.036 s) from the next
+  EXPECT_GT(rpe["trans_rmse"].get<double>(), 0.0) << rpe;
 }
 
 }  // namespace

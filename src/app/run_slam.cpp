@@ -1,24 +1,24 @@
 #include "run_slam.hpp"
 
 #include <chrono>
-#include <csignal>
-#include <functional>
 #include <condition_variable>
+#include <csignal>
 #include <cstdio>
 #include <ctime>
 #include <deque>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
+#include <memory>
 #include <mutex>
 #include <thread>
 
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
-#include "vslam/core/error.hpp"
-
 #include "stop_signal.hpp"
+#include "vslam/core/error.hpp"
 #include "vslam/eval/ate.hpp"
 #include "vslam/eval/rpe.hpp"
 #include "vslam/io/atomic_file.hpp"
@@ -471,19 +471,20 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
     throw std::logic_error("runSlam: --mode and the config's sensor disagree");
   // Every listed file is there before any work starts: a missing one fails now, not at frame 40.
   sequence.checkFilesPresent(begin, end, !mono);
-  std::error_code error;
-  fs::create_directories(out_dir, error);
-  if (error) throw InputError(out_dir, 0, "cannot create the output folder: " + error.message());
   SystemOptions system_options;
   system_options.deterministic = options.deterministic;
   system_options.realtime = options.realtime;
   System system(sequence.config, system_options);
+  std::error_code error;
+  fs::create_directories(out_dir, error);
+  if (error) throw InputError(out_dir, 0, "cannot create the output folder: " + error.message());
 
   spdlog::info("running {} ({} frames, {}, {}) into {}", sequence.name, end - begin, options.mode,
                options.deterministic ? "deterministic" : options.realtime ? "threaded, real time" : "threaded",
                out_dir);
-  const StopSignals stop_signals;  // Ctrl-C from here on stops the run and keeps what it has
-  const StopRequest& stop = stop_signals.request();
+  // Ctrl-C from here until the outputs are written stops the run and keeps what it has.
+  auto stop_signals = std::make_unique<StopSignals>();
+  const StopRequest& stop = stop_signals->request();
   const auto start = std::chrono::steady_clock::now();
   RunOutcome outcome;
   try {
@@ -491,11 +492,14 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   } catch (const std::exception& e) {
     outcome.fail(e.what());
   }
-  if (stop.signal != 0 && outcome.status == RunStatus::Completed) {
+  auto noteInterruption = [&] {
+    if (stop.signal == 0 || outcome.status != RunStatus::Completed) return;
     outcome.status = RunStatus::Interrupted;
     outcome.stop_signal = stop.signal;
-  }
+  };
+  noteInterruption();
   finishRun(system, stop, outcome);
+  noteInterruption();  // a signal during the final BA of a run that had read every frame
   outcome.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   // Every output that can be written is: one that fails fails the run, not the others.
@@ -585,6 +589,7 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   } catch (const std::exception& e) {
     outcome.fail(e.what());
   }
+  stop_signals.reset();  // the outputs are written: Ctrl-C ends the process again
   if (outcome.status == RunStatus::Completed && !options.no_render) renderRun(out_dir);
 
   printSummary(report, system, sequence, options, outcome, out_dir);

@@ -146,6 +146,33 @@ TEST(ReliabilityFrames, MissingOrEmptyImageFailsBeforeAnyWork) {
   ASSERT_EQ(lines.size(), 1u) << empty.err;
   EXPECT_TRUE(contains(lines[0], missing + ": image file is empty")) << lines[0];
   EXPECT_FALSE(fs::exists(dir / "run"));
+
+  // In RGB-D, the paired depth images are checked too. Every frame gets a copy
+  // of one real depth image (the first colour image restored), but one is missing.
+  fs::copy_file(rgbFile(sequence, 0), missing, fs::copy_options::overwrite_existing);
+  const fs::path real_depth = test::tumSequence("freiburg1_xyz") / "depth" / "1305031102.160407.png";
+  fs::create_directories(sequence / "depth");
+  std::ifstream colour_list(sequence / "rgb.txt");
+  std::ofstream depth_list(sequence / "depth.txt");
+  int frame = 0;
+  std::string missing_depth;
+  for (std::string line; std::getline(colour_list, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    const std::string timestamp = line.substr(0, line.find(' '));
+    const std::string depth = "depth/" + timestamp + ".png";
+    depth_list << timestamp << " " << depth << "\n";
+    if (frame++ == 7)
+      missing_depth = (sequence / depth).string();
+    else
+      fs::copy_file(real_depth, sequence / depth);
+  }
+  depth_list.close();
+  const Outcome rgbd = vslam(runOn(sequence, dir / "run") + " --mode rgbd", dir);
+  EXPECT_EQ(rgbd.exit_code, 2) << rgbd.err;
+  lines = errorLines(rgbd.err);
+  ASSERT_EQ(lines.size(), 1u) << rgbd.err;
+  EXPECT_EQ(lines[0], "error: " + missing_depth + ": image file does not exist");
+  EXPECT_FALSE(fs::exists(dir / "run"));
 }
 
 // A truncated JPEG decodes "successfully" into a partial image; it is skipped,

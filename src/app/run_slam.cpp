@@ -333,9 +333,11 @@ void finishRun(System& system, const StopRequest& stop, RunOutcome& outcome) {
   if (outcome.status == RunStatus::Interrupted) {
     const int keyframes = system.stats().keyframes;
     finish.final_ba = keyframes <= kQuickFinalBaKeyframes && !stop.skip_final_ba;
-    spdlog::warn("interrupted: finishing Local Mapping{}", finish.final_ba ? " and the final BA (Ctrl-C again skips it)"
-                                                                           : ", no final BA (" + std::to_string(keyframes) +
-                                                                                 " keyframes)");
+    if (finish.final_ba)
+      spdlog::warn("interrupted: finishing Local Mapping and the final BA (Ctrl-C again skips it)");
+    else
+      spdlog::warn("interrupted: finishing Local Mapping, without the final BA ({} keyframes{})", keyframes,
+                   stop.skip_final_ba ? ", a second signal" : ": too many to be quick");
   }
   if (outcome.status == RunStatus::Failed) finish.final_ba = false;
   try {
@@ -388,8 +390,8 @@ void putAccuracy(nlohmann::json& report, System& system, const Sequence& sequenc
   });
   putMetricGroup(report, "ate", ate, {"keyframes", "frames"});
   putMetricGroup(report, "rpe", rpe, {"frames"});
-  for (const char* part : {"keyframes", "frames"})
-    if (ate[part].is_null()) spdlog::warn("no ATE of the {}: {}", part, ate[std::string(part) + "_unavailable"].get<std::string>());
+  for (const std::string part : {"keyframes", "frames"})
+    if (ate[part].is_null()) spdlog::warn("no ATE of the {}: {}", part, ate[part + "_unavailable"].get<std::string>());
   if (report["ate"].is_null() || system.keyframeTrajectoryBeforeFinalBa().empty()) return;
   nlohmann::json before;
   putMetric(before, "keyframes", [&] { return ateJson(system.keyframeTrajectoryBeforeFinalBa(), sequence, mono); });

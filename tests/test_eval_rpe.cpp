@@ -1,5 +1,7 @@
 // RPE on synthetic trajectories with a known drift.
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -85,9 +87,59 @@ TEST(Rpe, NoPairsWhenTheTrajectoryIsShorterThanTheInterval) {
   for (int i = 0; i < 5; ++i) poses.push_back(at(0.1 * i, Vec3(i, 0, 0)));
   const RpeResult rpe = computeRpe(poses, poses, RpeOptions());
   EXPECT_EQ(rpe.pairs, 0);
+  // No pairs, no figures: null, never a perfect 0.
+  const nlohmann::json json = toJson(rpe);
+  EXPECT_TRUE(json["trans_rmse"].is_null()) << json;
+  EXPECT_TRUE(json["rot_rmse_deg"].is_null()) << json;
+  EXPECT_EQ(json["pairs"], 0);
   RpeOptions bad;
   bad.delta = 0;
   EXPECT_THROW(computeRpe(poses, poses, bad), InputError);
+}
+
+// Real KITTI times.txt steps by 0.1036224 s: t_i + 1 s falls 0.036 s from the
+// nearest frame (10 steps on), beyond the 0.02 s that pairs estimate and ground
+// truth. Before the interval tolerance followed the frame step, this found 0
+// pairs (and the run's report said trans_rmse 0).
+TEST(Rpe, KittiTimestampsPairTheNearestFrameToOneSecond) {
+  std::vector<StampedPose> groundtruth, estimate;
+  for (int k = 0; k < 50; ++k) {
+    const double t = k * 0.1036224;
+    groundtruth.push_back(at(t, Vec3(0, 0, 10 * t)));  // 10 m/s forward
+    estimate.push_back(at(t, Vec3(0, 0, 11 * t)));     // 10 % too fast
+  }
+  const RpeResult rpe = computeRpe(estimate, groundtruth, RpeOptions());
+  EXPECT_NEAR(rpe.interval_tolerance, 0.6 * 0.1036224, 1e-12);
+  ASSERT_EQ(rpe.pairs, 40);  // i = 0 ... 39, each with j = i + 10 (1.036 s on); from i = 40 the nearest is 0.067 s off
+  for (int k = 0; k < 40; ++k) EXPECT_EQ(rpe.pairs_idx[k], std::make_pair(k, k + 10));
+  // Over 1.036224 s the estimate runs 1.036224 m too far: per 1 s interval, 1.036224 m/s.
+  EXPECT_NEAR(rpe.trans_rmse, 1.036224, 1e-9);
+  EXPECT_NEAR(rpe.trans_mean, 1.036224, 1e-9);
+}
+
+// TUM's frames come at irregular times, with dropped frames: each interval
+// takes the frame nearest to t_i + delta, and none further than the tolerance.
+TEST(Rpe, TumIrregularTimestampsPairTheNearestFrame) {
+  const std::vector<double> times = {0.000, 0.033, 0.068, 0.099, 0.134, 0.166, 0.201,
+                                     0.232, 0.300, 0.334, 0.366, 0.399, 0.433};  // 0.266 dropped
+  std::vector<StampedPose> groundtruth, estimate;
+  for (double t : times) {
+    groundtruth.push_back(at(t, Vec3(t, 0, 0)));
+    estimate.push_back(at(t, Vec3(1.5 * t, 0, 0)));
+  }
+  RpeOptions options;
+  options.delta = 0.2;
+  const RpeResult rpe = computeRpe(estimate, groundtruth, options);
+  // Median step 0.034 s: the tolerance stays 0.02 s (0.6 x 0.034 = 0.0204).
+  EXPECT_NEAR(rpe.interval_tolerance, 0.0204, 1e-12);
+  // From 0.068 s the target 0.268 s lies 0.032 s from 0.300 s, and from 0.300 s nothing is near 0.5 s.
+  const std::vector<std::pair<int, int>> expected = {{0, 6}, {1, 7}, {3, 8}, {4, 9}, {5, 10}, {6, 11}, {7, 12}};
+  EXPECT_EQ(rpe.pairs_idx, expected);
+  EXPECT_EQ(rpe.pairs, 7);
+  // The error of each interval is 0.5 (t_j - t_i) m, divided by 0.2 s; the intervals sum to 1.4 s.
+  EXPECT_NEAR(rpe.trans_mean, 2.5 * 1.4 / 7, 1e-12);
+  const double squares = 3 * 0.201 * 0.201 + 0.199 * 0.199 + 2 * 0.2 * 0.2 + 0.198 * 0.198;
+  EXPECT_NEAR(rpe.trans_rmse, 2.5 * std::sqrt(squares / 7), 1e-12);
 }
 
 }  // namespace

@@ -56,6 +56,18 @@ Sequence openOrFetch(const RunCommandOptions& options) {
   }
 }
 
+// A named sequence whose folder holds fewer frames than the benchmark has:
+// results on it are not the published sequence's, so say it out loud.
+void warnIfIncomplete(const Sequence& sequence, const std::string& spec) {
+  const int found = static_cast<int>(sequence.frames.size());
+  if (sequence.frames_expected <= 0 || found >= sequence.frames_expected) return;
+  const std::string fetch = sequence.kind == SequenceKind::Tum
+                                ? "fetch the whole sequence with 'tools/fetch_dataset.sh " + spec + "'"
+                                : "KITTI needs a registration at cvlibs.net: download the full sequence by hand";
+  spdlog::warn("{}: {} holds {} of the sequence's {} frames; results are for those {} only ({})", spec, sequence.root,
+               found, sequence.frames_expected, found, fetch);
+}
+
 std::string fixed(double value, int decimals) {
   char text[64];
   std::snprintf(text, sizeof(text), "%.*f", decimals, value);
@@ -65,6 +77,7 @@ std::string fixed(double value, int decimals) {
 int run(RunCommandOptions options) {
   Sequence sequence = openOrFetch(options);
   const size_t total_frames = sequence.frames.size();
+  warnIfIncomplete(sequence, options.seq);
   if (options.max_frames > 0 && static_cast<size_t>(options.max_frames) < total_frames)
     sequence.frames.resize(options.max_frames);
   applyDetectorOptions(options.detector, sequence.config.detector);
@@ -155,6 +168,9 @@ Command addRunCommand(CLI::App& app) {
   cli->add_option("--max-frames", options->max_frames, "Process only the first N frames; 0 = all")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  cli->add_flag("--strict", options->pipeline.strict,
+                "Fail the run on an unreadable frame, keeping what was computed (default: skip it with a warning; "
+                "report.json frames_skipped)");
   cli->add_flag("--no-render", options->pipeline.no_render,
                 "Write no PNG figures at the end (default: render them into the output folder, as `vslam render`)");
   cli->add_flag("--info", options->info_only,

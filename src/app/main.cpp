@@ -1,5 +1,6 @@
 // `vslam`: one executable, one subcommand per job. Logs go to stderr,
 // results to files and stdout.
+#include <algorithm>
 #include <iostream>
 #include <vector>
 
@@ -32,7 +33,19 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --help-all
+    // CLI11 would only say that a command is required.
+    if (argc > 1 && argv[1][0] != '-' &&
+        std::none_of(commands.begin(), commands.end(), [&](const auto& c) { return c.cli->get_name() == argv[1]; })) {
+      std::string names;
+      for (const auto& command : commands) names += (names.empty() ? "" : ", ") + command.cli->get_name();
+      std::cerr << "error: unknown command '" << argv[1] << "' (commands: " << names << ")\n";
+      return 2;
+    }
+    // A bad command line is an input error like any other: one line, exit 2
+    // (CLI11's own codes, e.g. 105 for a value out of range, mean nothing to a user).
+    std::cerr << "error: " << e.what() << " (see --help)\n";
+    return 2;
   }
   if (verbose) spdlog::set_level(spdlog::level::debug);
 

@@ -2,22 +2,26 @@
 
 #include <chrono>
 #include <condition_variable>
+#include <csignal>
 #include <cstdio>
 #include <ctime>
 #include <deque>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
+#include <memory>
 #include <mutex>
 #include <thread>
 
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include "stop_signal.hpp"
 #include "vslam/core/error.hpp"
-
 #include "vslam/eval/ate.hpp"
 #include "vslam/eval/rpe.hpp"
+#include "vslam/io/atomic_file.hpp"
 #include "vslam/io/ply.hpp"
 #include "vslam/io/trajectory_io.hpp"
 #include "vslam/render/run_renders.hpp"
@@ -29,11 +33,20 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// A frame left out because one of its files could not be read.
+struct SkippedFrame {
+  int index = 0;
+  std::string file;
+  std::string reason;  // the one-line error, naming the file
+};
+
 struct LoadedFrame {
   size_t position = 0;
   cv::Mat image;
   cv::Mat depth;
-  std::string error;
+  std::string error;  // the run cannot go on (e.g. an image of the wrong size)
+  bool unreadable = false;
+  SkippedFrame skipped;  // when unreadable
 };
 
 // Reads images on a separate thread, a few frames ahead, so Tracking never
@@ -65,16 +78,7 @@ class FramePrefetcher {
  private:
   void run() {
     for (size_t i = next_; i < end_; ++i) {
-      LoadedFrame frame;
-      frame.position = i;
-      try {
-        frame.image = sequence_.loadColor(i);
-        // A frame without a paired depth image is tracked from colour alone.
-        if (with_depth_ && !sequence_.frames[i].depth_path.empty())
-          frame.depth = sequence_.loadDepthMeters(i, frame.image.size());
-      } catch (const std::exception& e) {
-        frame.error = e.what();
-      }
+      LoadedFrame frame = load(i);
       std::unique_lock<std::mutex> lock(mutex_);
       cv_.wait(lock, [this] { return queue_.size() < kAhead || stop_; });
       if (stop_) break;
@@ -86,6 +90,25 @@ class FramePrefetcher {
     std::lock_guard<std::mutex> lock(mutex_);
     done_ = true;
     cv_.notify_all();
+  }
+
+  LoadedFrame load(size_t i) const {
+    LoadedFrame frame;
+    frame.position = i;
+    const FrameEntry& entry = sequence_.frames[i];
+    std::string file = entry.image_path;
+    try {
+      frame.image = sequence_.loadColor(i);
+      // A frame without a paired depth image is tracked from colour alone.
+      file = entry.depth_path;
+      if (with_depth_ && !entry.depth_path.empty()) frame.depth = sequence_.loadDepthMeters(i, frame.image.size());
+    } catch (const FrameUnreadable& e) {
+      frame.unreadable = true;
+      frame.skipped = {entry.index, file, e.what()};
+    } catch (const std::exception& e) {
+      frame.error = e.what();
+    }
+    return frame;
   }
 
   static constexpr size_t kAhead = 4;
@@ -149,6 +172,20 @@ nlohmann::json rpeJson(const std::vector<StampedPose>& estimate, const Sequence&
   return json;
 }
 
+// Writes `text` to `path` atomically; a write error (a full disk) names the file.
+void writeTextFile(const std::string& path, const std::string& text) {
+  writeFileAtomically(path, [&](const std::string& temporary) {
+    std::ofstream out(temporary);
+    out << text;
+    out.close();
+    if (!out) throw InputError(path, 0, "write error (is the disk full?)");
+  });
+}
+
+void writeTrajectoryFile(const std::string& path, const std::vector<StampedPose>& poses) {
+  writeFileAtomically(path, [&](const std::string& temporary) { writeTumTrajectory(temporary, poses); });
+}
+
 // The ground truth over the run's time span (with a little margin), in TUM
 // format, so that the run folder is evaluated and rendered on its own.
 void writeRunGroundTruth(const std::string& path, const Sequence& sequence, double first_t, double last_t) {
@@ -156,7 +193,7 @@ void writeRunGroundTruth(const std::string& path, const Sequence& sequence, doub
   std::vector<StampedPose> span;
   for (const StampedPose& pose : sequence.groundtruth)
     if (pose.timestamp >= first_t - kMargin && pose.timestamp <= last_t + kMargin) span.push_back(pose);
-  writeTumTrajectory(path, span);
+  writeTrajectoryFile(path, span);
 }
 
 // A failure here is a warning: the run's other outputs are already written.
@@ -182,9 +219,7 @@ void writeObjectsJson(const std::string& path, const std::vector<ObjectLandmark>
                     {"box_max", vec3(object.box_max)},
                     {"points", static_cast<int>(object.point_ids.size())},
                     {"keyframes", object.keyframe_ids}});
-  std::ofstream out(path);
-  if (!out) throw InputError(path, 0, "cannot write the object map");
-  out << list.dump(2) << "\n";
+  writeTextFile(path, list.dump(2) + "\n");
 }
 
 nlohmann::json detectorJson(const DetectionSummary& summary) {
@@ -201,15 +236,233 @@ nlohmann::json detectorJson(const DetectionSummary& summary) {
           {"frames", summary.frames}};
 }
 
+enum class RunStatus { Completed, Interrupted, Failed };
+
+const char* toString(RunStatus status) {
+  switch (status) {
+    case RunStatus::Completed: return "completed";
+    case RunStatus::Interrupted: return "interrupted";
+    case RunStatus::Failed: return "failed";
+  }
+  return "";
+}
+
+// What the frame loop and the end of the run leave behind, whatever stopped them.
+struct RunOutcome {
+  RunStatus status = RunStatus::Completed;
+  std::string error;                  // Failed: the first error, one line
+  int stop_signal = 0;                // Interrupted: SIGINT or SIGTERM
+  int frames_dropped = 0;             // --realtime: arrived while Tracking was busy
+  std::vector<SkippedFrame> skipped;  // unreadable frames, left out
+  std::vector<double> tracked_points;  // map points tracked in each tracked frame
+  bool final_ba = false;              // a final BA result was merged
+  double wall_s = 0;
+
+  // The first failure is the one reported: later ones usually follow from it.
+  void fail(const std::string& message) {
+    if (status == RunStatus::Failed) return;
+    status = RunStatus::Failed;
+    error = message;
+    spdlog::error("{}", message);
+  }
+};
+
+// Feeds frames [begin, end) to the system until they run out, a stop signal
+// comes, or something fails. An unreadable frame is skipped (an error with --strict).
+void runFrameLoop(System& system, const Sequence& sequence, size_t begin, size_t end, const RunOptions& options,
+                  const StopRequest& stop, RunOutcome& outcome) {
+  const auto start = std::chrono::steady_clock::now();
+  FramePrefetcher prefetcher(sequence, begin, end, options.mode == "rgbd");
+  LoadedFrame loaded, ahead;
+  size_t processed = 0;
+  bool have_loaded = prefetcher.next(loaded);
+  const double first_timestamp = begin < end ? sequence.frames[begin].timestamp : 0.0;
+  // When a frame reaches a live camera's driver: its timestamp on the run's clock.
+  auto arrival = [&](size_t position) {
+    return start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                       std::chrono::duration<double>(sequence.frames[position].timestamp - first_timestamp));
+  };
+  bool have_ahead = have_loaded && prefetcher.next(ahead);
+  while (have_loaded && stop.signal == 0) {
+    if (options.realtime) {
+      std::this_thread::sleep_until(arrival(loaded.position));
+      // Only the newest frame that has arrived is tracked; the ones before it are dropped.
+      while (have_ahead && arrival(ahead.position) <= std::chrono::steady_clock::now()) {
+        ++outcome.frames_dropped;
+        loaded = std::move(ahead);
+        have_ahead = prefetcher.next(ahead);
+      }
+    }
+    if (!loaded.error.empty()) throw InputError(loaded.error);
+    if (loaded.unreadable) {
+      if (options.strict) throw InputError(loaded.skipped.reason + " (--strict: no frame is skipped)");
+      spdlog::warn("skipping frame {}: {}", loaded.skipped.index, loaded.skipped.reason);
+      outcome.skipped.push_back(loaded.skipped);
+    } else {
+      // Detection of the next frame runs on its own thread while this one is tracked
+      // (not in real time: which frame comes next is not known yet).
+      if (!options.realtime && have_ahead && !ahead.unreadable && ahead.error.empty())
+        system.submitAhead(sequence.frames[ahead.position].index, ahead.image);
+      const FrameEntry& entry = sequence.frames[loaded.position];
+      if (system.processFrame(entry.index, entry.timestamp, loaded.image, loaded.depth))
+        outcome.tracked_points.push_back(system.lastTrackedPoints());
+    }
+    loaded = std::move(ahead);
+    have_loaded = have_ahead;
+    have_ahead = have_loaded && prefetcher.next(ahead);
+    ++processed;
+    if (processed % 50 == 0 || !have_loaded) {
+      const SystemStats stats = system.stats();
+      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      spdlog::info("frame {}/{}: tracked {}, keyframes {}, map points {}, {:.1f} fps", processed, end - begin,
+                   stats.frames_tracked, stats.keyframes, stats.map_points, processed / elapsed);
+    }
+  }
+}
+
+// An interrupted run keeps the final BA only when it is quick: a map this small
+// takes about a second (a second signal stops it anyway).
+constexpr int kQuickFinalBaKeyframes = 100;
+
+// Lets Local Mapping and Loop Closing finish their queues (Tracking waits for
+// Local Mapping whenever its queue is full, so what is left is bounded), then
+// runs the final BA unless the run was interrupted and the map is large.
+void finishRun(System& system, const StopRequest& stop, RunOutcome& outcome) {
+  FinishOptions finish;
+  finish.abort_final_ba = &stop.skip_final_ba;
+  if (outcome.status == RunStatus::Interrupted) {
+    const int keyframes = system.stats().keyframes;
+    finish.final_ba = keyframes <= kQuickFinalBaKeyframes && !stop.skip_final_ba;
+    if (finish.final_ba)
+      spdlog::warn("interrupted: finishing Local Mapping and the final BA (Ctrl-C again skips it)");
+    else
+      spdlog::warn("interrupted: finishing Local Mapping, without the final BA ({} keyframes{})", keyframes,
+                   stop.skip_final_ba ? ", a second signal" : ": too many to be quick");
+  }
+  if (outcome.status == RunStatus::Failed) finish.final_ba = false;
+  try {
+    outcome.final_ba = system.finish(finish);
+  } catch (const std::exception& e) {
+    outcome.fail(e.what());
+  }
+}
+
+// Puts `compute()` under `name`, or null and `<name>_unavailable` with the
+// reason: a figure that cannot be computed is never a 0.
+void putMetric(nlohmann::json& parent, const std::string& name, const std::function<nlohmann::json()>& compute) {
+  try {
+    parent[name] = compute();
+  } catch (const InputError& error) {
+    parent[name] = nullptr;
+    parent[name + "_unavailable"] = error.what();
+  }
+}
+
+// `parent[name]` is null with a reason when none of its parts could be computed.
+void putMetricGroup(nlohmann::json& parent, const std::string& name, const nlohmann::json& group,
+                    const std::vector<std::string>& parts) {
+  for (const std::string& part : parts)
+    if (!group[part].is_null()) {
+      parent[name] = group;
+      return;
+    }
+  parent[name] = nullptr;
+  parent[name + "_unavailable"] = group[parts.front() + "_unavailable"];
+}
+
+// ATE of keyframes and frames, each whenever its own poses allow, and RPE of frames.
+void putAccuracy(nlohmann::json& report, System& system, const Sequence& sequence, bool mono,
+                 const std::vector<StampedPose>& trajectory, const std::vector<StampedPose>& keyframes) {
+  if (!sequence.hasGroundTruth()) {
+    report["ate"] = report["rpe"] = nullptr;
+    report["ate_unavailable"] = report["rpe_unavailable"] = "the sequence has no ground truth";
+    return;
+  }
+  nlohmann::json ate, rpe;
+  putMetric(ate, "keyframes", [&] { return ateJson(keyframes, sequence, mono); });
+  putMetric(ate, "frames", [&] { return ateJson(trajectory, sequence, mono); });
+  putMetric(rpe, "frames", [&] {
+    if (mono && ate["frames"].is_null())
+      throw InputError("a monocular RPE needs the scale of the frames' ATE, and it has none");
+    nlohmann::json json = rpeJson(trajectory, sequence, mono ? ate["frames"]["scale"].get<double>() : 1.0);
+    if (json["pairs"] == 0) throw InputError("no two tracked frames are 1 s apart");
+    return json;
+  });
+  putMetricGroup(report, "ate", ate, {"keyframes", "frames"});
+  putMetricGroup(report, "rpe", rpe, {"frames"});
+  for (const std::string part : {"keyframes", "frames"})
+    if (ate[part].is_null()) spdlog::warn("no ATE of the {}: {}", part, ate[part + "_unavailable"].get<std::string>());
+  if (report["ate"].is_null() || system.keyframeTrajectoryBeforeFinalBa().empty()) return;
+  nlohmann::json before;
+  putMetric(before, "keyframes", [&] { return ateJson(system.keyframeTrajectoryBeforeFinalBa(), sequence, mono); });
+  putMetric(before, "frames", [&] { return ateJson(system.frameTrajectoryBeforeFinalBa(), sequence, mono); });
+  report["ate_before_final_ba"] = before;
+}
+
+void printSummary(const nlohmann::json& report, System& system, const Sequence& sequence, const RunOptions& options,
+                  const RunOutcome& outcome, const std::string& out_dir) {
+  const bool mono = options.mode == "mono";
+  const SystemStats stats = system.stats();
+  std::cout << "sequence: " << sequence.name << " (" << options.mode << ")\n";
+  std::cout << "status: " << toString(outcome.status);
+  if (outcome.status == RunStatus::Interrupted)
+    std::cout << " (" << (outcome.stop_signal == SIGINT ? "SIGINT" : "SIGTERM") << " after " << stats.frames
+              << " frames)";
+  std::cout << "\nframes tracked: " << report["frames_tracked"].get<int>() << " / " << stats.frames;
+  if (stats.initialised_at_index >= 0) std::cout << " (initialised at frame " << stats.initialised_at_index << ")";
+  if (!outcome.skipped.empty()) std::cout << ", " << outcome.skipped.size() << " skipped (unreadable)";
+  std::cout << "\nkeyframes: " << stats.keyframes << ", map points: " << stats.map_points << "\n";
+  if (report["ate"].is_object()) {
+    const nlohmann::json& kf = report["ate"]["keyframes"];
+    if (kf.is_null())
+      std::cout << "ATE RMSE keyframes: none (" << report["ate"]["keyframes_unavailable"].get<std::string>() << ")\n";
+    else if (mono)
+      std::printf("ATE RMSE keyframes: %.4f m (%d pairs, Sim(3) alignment, scale %.4f)\n", kf["rmse_m"].get<double>(),
+                  kf["pairs"].get<int>(), kf["scale"].get<double>());
+    else
+      std::printf("ATE RMSE keyframes: %.4f m (%d pairs, SE(3) alignment; Sim(3) would scale by %.4f)\n",
+                  kf["rmse_m"].get<double>(), kf["pairs"].get<int>(), kf["sim3_scale"].get<double>());
+    const nlohmann::json& frames = report["ate"]["frames"];
+    if (frames.is_null())
+      std::cout << "ATE RMSE frames:    none (" << report["ate"]["frames_unavailable"].get<std::string>() << ")\n";
+    else
+      std::printf("ATE RMSE frames:    %.4f m (%d pairs)\n", frames["rmse_m"].get<double>(), frames["pairs"].get<int>());
+  }
+  if (report.contains("ate_unavailable"))
+    std::cout << "ATE: none (" << report["ate_unavailable"].get<std::string>() << ")\n";
+  if (report.contains("ate_before_final_ba")) {
+    auto rmse = [&](const char* part) {
+      const nlohmann::json& ate = report["ate_before_final_ba"][part];
+      return ate.is_null() ? std::string("none") : fmt::format("{:.4f} m", ate["rmse_m"].get<double>());
+    };
+    std::cout << "ATE RMSE before final BA: keyframes " << rmse("keyframes") << ", frames " << rmse("frames") << "\n";
+  }
+  std::cout << "loops closed: " << report["loops"].size() << ", relocalisations: " << stats.relocalisations << "\n";
+  const auto summary = system.timer().summary();
+  // "Tracking" per frame includes feature extraction, as ORB-SLAM reports it.
+  if (summary.count("frame"))
+    std::printf("tracking: median %.1f ms, p95 %.1f ms per frame; wall %.1f s (%.1f fps), peak %.0f MB\n",
+                summary.at("frame").median_ms, summary.at("frame").p95_ms, outcome.wall_s,
+                stats.frames / outcome.wall_s, peakRssMb());
+  for (const char* stage : {"local_mapping", "loop_detection", "loop_correction", "full_ba", "final_ba"})
+    if (summary.count(stage))
+      std::printf("%s: median %.1f ms, p95 %.1f ms, %zu times\n", stage, summary.at(stage).median_ms,
+                  summary.at(stage).p95_ms, summary.at(stage).count);
+  const DetectionSummary detection = system.detectionSummary();
+  if (detection.enabled)
+    std::printf("detector: %s at %d, median %.1f ms per frame (Tracking waited %.1f), %.0f keypoints added per "
+                "frame; %d objects\n",
+                detection.model.c_str(), detection.input_size, detection.median_ms, detection.wait_median_ms,
+                detection.keypoints_added_per_frame, report["objects"].get<int>());
+  std::cout << "output: " << out_dir << "\n";
+  std::fflush(stdout);
+}
+
 }  // namespace
 
 int runSlam(const Sequence& sequence, const RunOptions& options) {
   const bool mono = options.mode == "mono";
   const std::string out_dir = options.out_dir.empty() ? defaultOutDir(sequence.name) : options.out_dir;
-  std::error_code error;
-  fs::create_directories(out_dir, error);
-  if (error) throw InputError(out_dir, 0, "cannot create the output folder: " + error.message());
-
   const size_t begin = std::min<size_t>(options.start_frame, sequence.frames.size());
   size_t end = sequence.frames.size();
   if (options.max_frames > 0) end = std::min(end, begin + options.max_frames);
@@ -218,87 +471,77 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
     throw InputError("--realtime and --deterministic exclude each other: a live camera does not wait");
   if ((sequence.config.sensor == SensorMode::RgbD) == mono)
     throw std::logic_error("runSlam: --mode and the config's sensor disagree");
+  // Every listed file is there before any work starts: a missing one fails now, not at frame 40.
+  sequence.checkFilesPresent(begin, end, !mono);
   SystemOptions system_options;
   system_options.deterministic = options.deterministic;
   system_options.realtime = options.realtime;
   System system(sequence.config, system_options);
+  std::error_code error;
+  fs::create_directories(out_dir, error);
+  if (error) throw InputError(out_dir, 0, "cannot create the output folder: " + error.message());
 
   spdlog::info("running {} ({} frames, {}, {}) into {}", sequence.name, end - begin, options.mode,
                options.deterministic ? "deterministic" : options.realtime ? "threaded, real time" : "threaded",
                out_dir);
+  // Ctrl-C from here until the outputs are written stops the run and keeps what it has.
+  auto stop_signals = std::make_unique<StopSignals>();
+  const StopRequest& stop = stop_signals->request();
   const auto start = std::chrono::steady_clock::now();
-  std::vector<double> tracked_points;  // map points tracked in each tracked frame
-  int frames_dropped = 0;              // --realtime: arrived while Tracking was busy
-  {
-    FramePrefetcher prefetcher(sequence, begin, end, !mono);
-    LoadedFrame loaded, ahead;
-    size_t processed = 0;
-    bool have_loaded = prefetcher.next(loaded);
-    const double first_timestamp = begin < end ? sequence.frames[begin].timestamp : 0.0;
-    // When a frame reaches a live camera's driver: its timestamp on the run's clock.
-    auto arrival = [&](size_t position) {
-      return start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                         std::chrono::duration<double>(sequence.frames[position].timestamp - first_timestamp));
-    };
-    bool have_ahead = have_loaded && prefetcher.next(ahead);
-    while (have_loaded) {
-      if (options.realtime) {
-        std::this_thread::sleep_until(arrival(loaded.position));
-        // Only the newest frame that has arrived is tracked; the ones before it are dropped.
-        while (have_ahead && arrival(ahead.position) <= std::chrono::steady_clock::now()) {
-          ++frames_dropped;
-          loaded = std::move(ahead);
-          have_ahead = prefetcher.next(ahead);
-        }
-      }
-      if (!loaded.error.empty()) throw InputError(loaded.error);
-      // Detection of the next frame runs on its own thread while this one is tracked
-      // (not in real time: which frame comes next is not known yet).
-      if (!options.realtime && have_ahead && ahead.error.empty())
-        system.submitAhead(sequence.frames[ahead.position].index, ahead.image);
-      const FrameEntry& entry = sequence.frames[loaded.position];
-      if (system.processFrame(entry.index, entry.timestamp, loaded.image, loaded.depth))
-        tracked_points.push_back(system.lastTrackedPoints());
-      loaded = std::move(ahead);
-      have_loaded = have_ahead;
-      have_ahead = have_loaded && prefetcher.next(ahead);
-      ++processed;
-      if (processed % 50 == 0 || !have_loaded) {
-        const SystemStats stats = system.stats();
-        const double elapsed =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        spdlog::info("frame {}/{}: tracked {}, keyframes {}, map points {}, {:.1f} fps", processed, end - begin,
-                     stats.frames_tracked, stats.keyframes, stats.map_points, processed / elapsed);
-      }
-    }
+  RunOutcome outcome;
+  try {
+    runFrameLoop(system, sequence, begin, end, options, stop, outcome);
+  } catch (const std::exception& e) {
+    outcome.fail(e.what());
   }
-  system.finish();
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  auto noteInterruption = [&] {
+    if (stop.signal == 0 || outcome.status != RunStatus::Completed) return;
+    outcome.status = RunStatus::Interrupted;
+    outcome.stop_signal = stop.signal;
+  };
+  noteInterruption();
+  finishRun(system, stop, outcome);
+  noteInterruption();  // a signal during the final BA of a run that had read every frame
+  outcome.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
+  // Every output that can be written is: one that fails fails the run, not the others.
+  auto write = [&](const std::function<void()>& write_one) {
+    try {
+      write_one();
+    } catch (const std::exception& e) {
+      outcome.fail(e.what());
+    }
+  };
   const std::vector<StampedPose> trajectory = system.frameTrajectory();
   const std::vector<StampedPose> keyframes = system.keyframeTrajectory();
-  writeTumTrajectory(out_dir + "/trajectory.txt", trajectory);
-  writeTumTrajectory(out_dir + "/keyframes.txt", keyframes);
-
-  std::vector<PlyPoint> cloud;
-  for (const ExportedMapPoint& point : system.mapPoints()) cloud.push_back({point.position, point.bgr, point.class_id});
-  writeMapPly(out_dir + "/map.ply", cloud);
+  write([&] { writeTrajectoryFile(out_dir + "/trajectory.txt", trajectory); });
+  write([&] { writeTrajectoryFile(out_dir + "/keyframes.txt", keyframes); });
+  write([&] {
+    std::vector<PlyPoint> cloud;
+    for (const ExportedMapPoint& point : system.mapPoints()) cloud.push_back({point.position, point.bgr, point.class_id});
+    writeFileAtomically(out_dir + "/map.ply", [&](const std::string& temporary) { writeMapPly(temporary, cloud); });
+  });
   const std::vector<ObjectLandmark> objects = system.objectMap();
-  writeObjectsJson(out_dir + "/objects.json", objects);
+  write([&] { writeObjectsJson(out_dir + "/objects.json", objects); });
 
   const SystemStats stats = system.stats();
-  const std::vector<int> lost = system.lostFrameIndices();
   nlohmann::json report;
   report["sequence"] = sequence.name;
   report["sequence_root"] = sequence.root;
   report["mode"] = options.mode;
   report["deterministic"] = options.deterministic;
   report["realtime"] = options.realtime;
-  report["frames_dropped"] = frames_dropped;
+  report["frames_dropped"] = outcome.frames_dropped;
   report["camera"] = sequence.config.camera.name;
+  report["frames_expected"] = sequence.frames_expected > 0 ? nlohmann::json(sequence.frames_expected) : nullptr;
   report["frames_total"] = stats.frames;
+  report["frames_processed"] = stats.frames;
   report["frames_tracked"] = static_cast<int>(trajectory.size());
-  report["frames_lost"] = lost;
+  report["frames_lost"] = system.lostFrameIndices();
+  report["frames_skipped"] = static_cast<int>(outcome.skipped.size());
+  report["skipped_frames"] = nlohmann::json::array();
+  for (const SkippedFrame& skipped : outcome.skipped)
+    report["skipped_frames"].push_back({{"frame", skipped.index}, {"file", skipped.file}, {"reason", skipped.reason}});
   report["initialised_at_frame"] = stats.initialised_at_index;
   report["keyframes"] = stats.keyframes;
   report["map_points"] = stats.map_points;
@@ -310,40 +553,15 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   if (!mono) report["frames_without_depth"] = stats.frames_without_depth;
   report["groundtruth_file"] = sequence.groundtruth_path;
   if (sequence.hasGroundTruth() && end > begin) {
-    writeRunGroundTruth(out_dir + "/groundtruth.txt", sequence, sequence.frames[begin].timestamp,
-                        sequence.frames[end - 1].timestamp);
+    write([&] {
+      writeRunGroundTruth(out_dir + "/groundtruth.txt", sequence, sequence.frames[begin].timestamp,
+                          sequence.frames[end - 1].timestamp);
+    });
     report["groundtruth_source"] = sequence.groundtruth_path;
     report["groundtruth_file"] = "groundtruth.txt";  // in the run folder
   }
-  report["ate"] = nullptr;
-  report["rpe"] = nullptr;
-  // A run that tracked too little (fewer than 3 poses matched to the ground
-  // truth, or all in one place) has no ATE; that is a result, not an error.
-  if (sequence.hasGroundTruth() && !keyframes.empty()) {
-    try {
-      nlohmann::json ate, rpe;
-      ate["keyframes"] = ateJson(keyframes, sequence, mono);
-      ate["frames"] = ateJson(trajectory, sequence, mono);
-      rpe["frames"] = rpeJson(trajectory, sequence, ate["frames"]["scale"].get<double>());
-      report["ate"] = ate;
-      report["rpe"] = rpe;
-    } catch (const InputError& error) {
-      report["ate_unavailable"] = error.what();
-      spdlog::warn("no ATE for this run: {}", error.what());
-    }
-  }
-  const std::vector<StampedPose>& keyframes_before_ba = system.keyframeTrajectoryBeforeFinalBa();
-  if (report["ate"].is_object() && !keyframes_before_ba.empty()) {
-    try {
-      nlohmann::json before;
-      before["keyframes"] = ateJson(keyframes_before_ba, sequence, mono);
-      before["frames"] = ateJson(system.frameTrajectoryBeforeFinalBa(), sequence, mono);
-      report["ate_before_final_ba"] = before;
-    } catch (const InputError& error) {
-      spdlog::warn("no ATE before the final BA: {}", error.what());
-    }
-  }
-  report["final_ba"] = sequence.config.loop.final_ba;
+  putAccuracy(report, system, sequence, mono, trajectory, keyframes);
+  report["final_ba"] = outcome.final_ba;
   report["relocalisations"] = stats.relocalisations;
   nlohmann::json loops = nlohmann::json::array();
   for (const LoopRecord& loop : system.loops())
@@ -358,54 +576,33 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   report["stage_ms"] = stage_ms;
   report["detector"] = detectorJson(system.detectionSummary());
   report["objects"] = static_cast<int>(objects.size());
-  report["tracked_points_per_frame"] = percentile(tracked_points, 0.5);  // median over tracked frames
-  report["wall_s"] = wall_s;
-  report["fps"] = wall_s > 0 ? stats.frames / wall_s : 0.0;
+  report["tracked_points_per_frame"] = percentile(outcome.tracked_points, 0.5);  // median over tracked frames
+  report["wall_s"] = outcome.wall_s;
+  report["fps"] = outcome.wall_s > 0 ? stats.frames / outcome.wall_s : 0.0;
   report["peak_rss_mb"] = peakRssMb();
-  std::ofstream(out_dir + "/report.json") << report.dump(2) << "\n";
-  if (!options.no_render) renderRun(out_dir);
-
-  // Summary on stdout.
-  std::cout << "sequence: " << sequence.name << " (" << options.mode << ")\n";
-  std::cout << "frames tracked: " << trajectory.size() << " / " << stats.frames;
-  if (stats.initialised_at_index >= 0) std::cout << " (initialised at frame " << stats.initialised_at_index << ")";
-  std::cout << "\nkeyframes: " << stats.keyframes << ", map points: " << stats.map_points << "\n";
-  if (report["ate"].is_object()) {
-    const nlohmann::json& kf = report["ate"]["keyframes"];
-    if (mono)
-      std::printf("ATE RMSE keyframes: %.4f m (%d pairs, Sim(3) alignment, scale %.4f)\n", kf["rmse_m"].get<double>(),
-                  kf["pairs"].get<int>(), kf["scale"].get<double>());
-    else
-      std::printf("ATE RMSE keyframes: %.4f m (%d pairs, SE(3) alignment; Sim(3) would scale by %.4f)\n",
-                  kf["rmse_m"].get<double>(), kf["pairs"].get<int>(), kf["sim3_scale"].get<double>());
-    std::printf("ATE RMSE frames:    %.4f m (%d pairs)\n", report["ate"]["frames"]["rmse_m"].get<double>(),
-                report["ate"]["frames"]["pairs"].get<int>());
+  // Last, so that it says whether the other outputs were written.
+  report["status"] = toString(outcome.status);
+  report["error"] = outcome.status == RunStatus::Failed ? nlohmann::json(outcome.error) : nullptr;
+  report["stop_signal"] = outcome.stop_signal == SIGINT ? nlohmann::json("SIGINT")
+                          : outcome.stop_signal == SIGTERM ? nlohmann::json("SIGTERM")
+                                                           : nullptr;
+  try {
+    writeTextFile(out_dir + "/report.json", report.dump(2) + "\n");
+  } catch (const std::exception& e) {
+    outcome.fail(e.what());
   }
-  if (report.contains("ate_unavailable"))
-    std::cout << "ATE: none (" << report["ate_unavailable"].get<std::string>() << ")\n";
-  if (report.contains("ate_before_final_ba"))
-    std::printf("ATE RMSE before final BA: keyframes %.4f m, frames %.4f m\n",
-                report["ate_before_final_ba"]["keyframes"]["rmse_m"].get<double>(),
-                report["ate_before_final_ba"]["frames"]["rmse_m"].get<double>());
-  std::cout << "loops closed: " << loops.size() << ", relocalisations: " << stats.relocalisations << "\n";
-  const auto summary = system.timer().summary();
-  // "Tracking" per frame includes feature extraction, as ORB-SLAM reports it.
-  if (summary.count("frame"))
-    std::printf("tracking: median %.1f ms, p95 %.1f ms per frame; wall %.1f s (%.1f fps), peak %.0f MB\n",
-                summary.at("frame").median_ms, summary.at("frame").p95_ms, wall_s, stats.frames / wall_s, peakRssMb());
-  for (const char* stage : {"local_mapping", "loop_detection", "loop_correction", "full_ba", "final_ba"})
-    if (summary.count(stage))
-      std::printf("%s: median %.1f ms, p95 %.1f ms, %zu times\n", stage, summary.at(stage).median_ms,
-                  summary.at(stage).p95_ms, summary.at(stage).count);
-  const DetectionSummary detection = system.detectionSummary();
-  if (detection.enabled)
-    std::printf("detector: %s at %d, median %.1f ms per frame (Tracking waited %.1f), %.0f keypoints added per "
-                "frame; %zu objects\n",
-                detection.model.c_str(), detection.input_size, detection.median_ms, detection.wait_median_ms,
-                detection.keypoints_added_per_frame, objects.size());
-  std::cout << "output: " << out_dir << "\n";
-  std::fflush(stdout);
-  return 0;
+  stop_signals.reset();  // the outputs are written: Ctrl-C ends the process again
+  if (outcome.status == RunStatus::Completed && !options.no_render) renderRun(out_dir);
+
+  printSummary(report, system, sequence, options, outcome, out_dir);
+  switch (outcome.status) {
+    case RunStatus::Completed: return 0;
+    case RunStatus::Interrupted: return 128 + outcome.stop_signal;  // 130 for SIGINT, 143 for SIGTERM, as a shell does
+    case RunStatus::Failed:
+      std::cerr << "error: " << outcome.error << " (what was computed is in " << out_dir << ")\n";
+      return 2;
+  }
+  return 2;
 }
 
 }  // namespace vslam::app

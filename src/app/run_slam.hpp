@@ -20,9 +20,13 @@ struct RunOptions {
   int max_frames = 0;         // 0 = all
   int start_frame = 0;
   bool no_render = false;     // true: no PNGs at the end (renderRunFolder)
+  bool strict = false;        // an unreadable frame fails the run instead of being skipped
 };
 
-// Returns the process exit status.
+// Returns the process exit status: 0 completed; 130 / 143 stopped by SIGINT /
+// SIGTERM; 2 failed after work had started. Whatever happened, the outputs
+// hold what was computed and report.json's "status" says which it was.
+// Throws InputError for bad input found before any work (e.g. a missing image).
 int runSlam(const Sequence& sequence, const RunOptions& options);
 
 }  // namespace vslam::app

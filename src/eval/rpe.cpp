@@ -16,6 +16,15 @@ double rotationAngleDeg(const Mat3& R) {
   return Eigen::AngleAxisd(Quat(R).normalized()).angle() * 180.0 / M_PI;
 }
 
+// The median spacing of increasing times (0 for fewer than two).
+double medianStep(const std::vector<double>& times) {
+  std::vector<double> steps;
+  for (size_t k = 1; k < times.size(); ++k) steps.push_back(times[k] - times[k - 1]);
+  if (steps.empty()) return 0.0;
+  std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+  return steps[steps.size() / 2];
+}
+
 }  // namespace
 
 RpeResult computeRpe(const std::vector<StampedPose>& estimate, const std::vector<StampedPose>& groundtruth,
@@ -38,6 +47,11 @@ RpeResult computeRpe(const std::vector<StampedPose>& estimate, const std::vector
       along[k] = along[k - 1] + (groundtruth[pairs[k].second].T_wc.t - groundtruth[pairs[k - 1].second].T_wc.t).norm();
   }
 
+  if (by_time)
+    result.interval_tolerance = options.interval_tolerance > 0
+                                    ? options.interval_tolerance
+                                    : std::max(options.max_time_diff, 0.6 * medianStep(along));
+
   double trans_sum = 0, trans_squares = 0, rot_sum = 0, rot_squares = 0;
   for (int i = 0; i < n; ++i) {
     const double target = along[i] + options.delta;
@@ -45,7 +59,7 @@ RpeResult computeRpe(const std::vector<StampedPose>& estimate, const std::vector
     if (by_time) {
       // Nearest in time to the target, within the tolerance.
       if (j > i + 1 && (j == n || target - along[j - 1] < along[j] - target)) --j;
-      if (j >= n || std::abs(along[j] - target) > options.max_time_diff) continue;
+      if (j >= n || std::abs(along[j] - target) > result.interval_tolerance) continue;
     } else if (j >= n) {
       continue;
     }
@@ -62,6 +76,7 @@ RpeResult computeRpe(const std::vector<StampedPose>& estimate, const std::vector
     rot_sum += rot;
     rot_squares += rot * rot;
     ++result.pairs;
+    result.pairs_idx.emplace_back(pairs[i].first, pairs[j].first);
   }
   if (result.pairs > 0) {
     result.trans_mean = trans_sum / result.pairs;
@@ -73,6 +88,10 @@ RpeResult computeRpe(const std::vector<StampedPose>& estimate, const std::vector
 }
 
 nlohmann::json toJson(const RpeResult& result) {
+  if (result.pairs == 0)
+    return {{"trans_rmse", nullptr}, {"trans_mean", nullptr},          {"rot_rmse_deg", nullptr},
+            {"rot_mean_deg", nullptr}, {"pairs", 0},                  {"trans_units", result.trans_units},
+            {"rot_units", result.rot_units}};
   return {
       {"trans_rmse", result.trans_rmse},     {"trans_mean", result.trans_mean}, {"rot_rmse_deg", result.rot_rmse_deg},
       {"rot_mean_deg", result.rot_mean_deg}, {"pairs", result.pairs},           {"trans_units", result.trans_units},

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <fstream>
 #include <set>
 
 #include "vslam/core/error.hpp"
@@ -17,6 +18,31 @@ bool isImageFile(const fs::path& path) {
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return kExtensions.count(extension) > 0;
+}
+
+std::string imageTruncation(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "";
+  char head[8] = {};
+  in.read(head, sizeof(head));
+  const std::string start(head, static_cast<size_t>(in.gcount()));
+  const bool jpeg = start.size() >= 2 && start[0] == '\xFF' && start[1] == '\xD8';
+  const bool png = start.size() == 8 && start == "\x89PNG\r\n\x1A\n";
+  if (!jpeg && !png) return "";
+  // Writers may pad after the end (a few zero bytes): look for it in the tail.
+  constexpr std::streamoff kTail = 32;
+  in.clear();
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  in.seekg(std::max<std::streamoff>(0, size - kTail));
+  std::string tail(static_cast<size_t>(std::min(size, kTail)), '\0');
+  in.read(tail.data(), static_cast<std::streamsize>(tail.size()));
+  if (jpeg && tail.find("\xFF\xD9") == std::string::npos)
+    return "truncated JPEG: no end-of-image marker (FF D9) at its end";
+  // The IEND chunk is always the same bytes: type and CRC.
+  if (png && tail.find(std::string("IEND\xAE\x42\x60\x82", 8)) == std::string::npos)
+    return "truncated PNG: no IEND chunk at its end";
+  return "";
 }
 
 namespace {

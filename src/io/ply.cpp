@@ -215,6 +215,7 @@ void writeMapPly(const std::string& path, const std::vector<PlyPoint>& points) {
   std::ofstream out(path, std::ios::binary);
   if (!out) throw std::runtime_error(path + ": cannot open for writing");
   out.write(data.data(), static_cast<std::streamsize>(data.size()));
+  out.close();  // a full disk shows only when the buffer is flushed
   if (!out) throw std::runtime_error(path + ": write failed");
 }
 

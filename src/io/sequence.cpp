@@ -12,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "vslam/io/image_files.hpp"
 #include "vslam/io/sequence_catalog.hpp"
 #include "vslam/io/text_table.hpp"
 #include "vslam/io/timestamp_association.hpp"
@@ -213,6 +214,7 @@ struct Located {
   SequenceKind kind = SequenceKind::Tum;
   std::string camera;  // config/<camera>.yaml, "" if unknown
   fs::path kitti_poses;
+  int frames_expected = 0;  // the catalogue's count for a named sequence, 0 = unknown
 };
 
 Located locateTum(const std::string& spec, const SequenceOptions& options) {
@@ -228,7 +230,7 @@ Located locateTum(const std::string& spec, const SequenceOptions& options) {
     for (const fs::path& candidate :
          {fs::path(root) / "tum" / info->archive_name, fs::path(root) / info->archive_name}) {
       looked.push_back(candidate.string());
-      if (fs::is_directory(candidate)) return {candidate, SequenceKind::Tum, info->camera, {}};
+      if (fs::is_directory(candidate)) return {candidate, SequenceKind::Tum, info->camera, {}, info->frames};
     }
   }
   const std::string how_to_get = "Fetch it with 'tools/fetch_dataset.sh tum/" + info->short_name +
@@ -251,7 +253,7 @@ Located locateKitti(const std::string& spec, const SequenceOptions& options) {
     looked.push_back(candidate.string());
     if (fs::is_directory(candidate))
       return {candidate, SequenceKind::Kitti, kittiCameraFor(number),
-              fs::path(root) / "kitti" / "poses" / (std::string(nn) + ".txt")};
+              fs::path(root) / "kitti" / "poses" / (std::string(nn) + ".txt"), kittiFrameCount(number)};
   }
   throw SequenceNotFound(spec, 0,
                          "sequence not found; looked in " + joined(looked, ", ") +
@@ -330,6 +332,7 @@ Sequence openSequence(const std::string& spec, const SequenceOptions& options) {
   sequence.name = spec;
   sequence.root = absoluteFolder(located.folder);
   sequence.kind = located.kind;
+  sequence.frames_expected = located.frames_expected;
   sequence.config = loadCameraConfig(options, located.camera, sequence.root);
   if (located.kind == SequenceKind::Tum)
     readTumFolder(sequence);
@@ -363,14 +366,16 @@ cv::Mat Sequence::readImage(const std::string& path, int imread_flags, int list_
                             const std::string& size_of) const {
   const std::string listed_at =
       list_line > 0 ? " (listed at " + (fs::path(root) / what).string() + ":" + std::to_string(list_line) + ")" : "";
-  if (!fs::exists(path)) throw InputError(path, 0, "image file does not exist" + listed_at);
+  if (!fs::exists(path)) throw FrameUnreadable(path, 0, "image file does not exist" + listed_at);
+  const std::string truncation = imageTruncation(path);
+  if (!truncation.empty()) throw FrameUnreadable(path, 0, truncation + listed_at);
   cv::Mat image;
   try {
     image = cv::imread(path, imread_flags);
   } catch (const cv::Exception& e) {
-    throw InputError(path, 0, "cannot decode image: " + e.msg + listed_at);
+    throw FrameUnreadable(path, 0, "cannot decode image: " + e.msg + listed_at);
   }
-  if (image.empty()) throw InputError(path, 0, "cannot decode image (not a readable PNG or JPEG)" + listed_at);
+  if (image.empty()) throw FrameUnreadable(path, 0, "cannot decode image (not a readable PNG or JPEG)" + listed_at);
   if (!size_of.empty()) return image;  // the caller compares it with that image
   const PinholeCamera& camera = config.camera;
   if (camera.width > 0 && camera.height > 0 && (image.cols != camera.width || image.rows != camera.height))
@@ -379,6 +384,21 @@ cv::Mat Sequence::readImage(const std::string& path, int imread_flags, int list_
                          camera.name + "' of " + (config.source.empty() ? "the config" : config.source) + " is " +
                          std::to_string(camera.width) + "x" + std::to_string(camera.height));
   return image;
+}
+
+void Sequence::checkFilesPresent(size_t begin, size_t end, bool with_depth) const {
+  auto check = [&](const std::string& path, int list_line, const char* list) {
+    const std::string listed_at =
+        list_line > 0 ? " (listed at " + (fs::path(root) / list).string() + ":" + std::to_string(list_line) + ")" : "";
+    std::error_code error;
+    const auto size = fs::file_size(path, error);
+    if (error) throw InputError(path, 0, "image file does not exist" + listed_at);
+    if (size == 0) throw InputError(path, 0, "image file is empty" + listed_at);
+  };
+  for (size_t i = begin; i < std::min(end, frames.size()); ++i) {
+    check(frames[i].image_path, frames[i].list_line, kind == SequenceKind::Tum ? "rgb.txt" : "");
+    if (with_depth && !frames[i].depth_path.empty()) check(frames[i].depth_path, 0, "depth.txt");
+  }
 }
 
 cv::Mat Sequence::loadColor(size_t i) const {

@@ -3,6 +3,14 @@
 namespace vslam {
 namespace {
 
+// Only counts checked against a full copy of the sequence are listed (the rest
+// are 0, unknown): a wrong count would raise a false "incomplete" warning.
+int knownFrameCount(const std::string& short_name) {
+  if (short_name == "fr1_xyz") return 798;
+  if (short_name == "fr3_long_office_household") return 2585;
+  return 0;
+}
+
 std::vector<TumSequenceInfo> buildTumTable() {
   // Names as listed on the benchmark's download page, per Kinect.
   const std::vector<std::pair<int, std::vector<const char*>>> by_camera = {
@@ -41,6 +49,7 @@ std::vector<TumSequenceInfo> buildTumTable() {
       info.short_name = "fr" + std::to_string(freiburg) + "_" + name;
       info.archive_name = "rgbd_dataset_freiburg" + std::to_string(freiburg) + "_" + name;
       info.camera = "tum_fr" + std::to_string(freiburg);
+      info.frames = knownFrameCount(info.short_name);
       table.push_back(info);
     }
   }
@@ -71,6 +80,12 @@ std::string kittiCameraFor(int sequence_number) {
   if (sequence_number <= 2) return "kitti_00-02";
   if (sequence_number == 3) return "kitti_03";
   return "kitti_04-12";
+}
+
+int kittiFrameCount(int sequence_number) {
+  // The odometry benchmark's devkit (readme.txt): frames per sequence 00-10.
+  static const int kFrames[] = {4541, 1101, 4661, 801, 271, 2761, 1101, 1101, 4071, 1591, 1201};
+  return sequence_number >= 0 && sequence_number <= 10 ? kFrames[sequence_number] : 0;
 }
 
 }  // namespace vslam

@@ -119,8 +119,8 @@ bool System::processFrame(int index, double timestamp, const cv::Mat& image, con
   return tracked;
 }
 
-void System::finish() {
-  if (finished_) return;
+bool System::finish(const FinishOptions& finish_options) {
+  if (finished_) return false;
   finished_ = true;
   if (options_.deterministic) {
     local_mapping_->processQueued();
@@ -130,14 +130,23 @@ void System::finish() {
     if (loop_closing_) loop_closing_->finish();
   }
   rethrowWorkerFailure();
-  if (config_.loop.final_ba && tracking_->state() != TrackingState::NotInitialized) {
-    frames_before_final_ba_ = frameTrajectory();
-    keyframes_before_final_ba_ = keyframeTrajectory();
-    ScopedStage stage(&timer_, "final_ba");
-    const FullBundleAdjustmentResult result = runFullBundleAdjustment(*map_, config_.loop.final_ba_iterations);
-    spdlog::info("final bundle adjustment: {} keyframes, {} points, cost {:.1f} -> {:.1f}", result.keyframes,
-                 result.points, result.initial_cost, result.final_cost);
+  if (!config_.loop.final_ba || !finish_options.final_ba || tracking_->state() == TrackingState::NotInitialized)
+    return false;
+  frames_before_final_ba_ = frameTrajectory();
+  keyframes_before_final_ba_ = keyframeTrajectory();
+  ScopedStage stage(&timer_, "final_ba");
+  const FullBundleAdjustmentResult result =
+      runFullBundleAdjustment(*map_, config_.loop.final_ba_iterations, {finish_options.abort_final_ba, nullptr});
+  if (!result.merged) {
+    if (finish_options.abort_final_ba && finish_options.abort_final_ba->load())
+      spdlog::warn("final bundle adjustment stopped; the map is kept as it was before it");
+    frames_before_final_ba_.clear();
+    keyframes_before_final_ba_.clear();
+    return false;
   }
+  spdlog::info("final bundle adjustment: {} keyframes, {} points, cost {:.1f} -> {:.1f}", result.keyframes,
+               result.points, result.initial_cost, result.final_cost);
+  return true;
 }
 
 std::vector<LoopRecord> System::loops() const {

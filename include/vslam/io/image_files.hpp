@@ -18,6 +18,13 @@ struct ImageListOptions {
 // .tiff, .ppm, .pgm, .webp), whatever the letter case.
 bool isImageFile(const std::filesystem::path& path);
 
+// Why the image file at `path` is cut short, or "" when it is whole (or of
+// another format). A JPEG must end with its end-of-image marker (FF D9) and a
+// PNG with its IEND chunk: OpenCV decodes a truncated file into a partial
+// image without an error (libjpeg only prints a warning), so a copy that was
+// interrupted would otherwise be tracked as a real frame.
+std::string imageTruncation(const std::filesystem::path& path);
+
 // Every input is an image file or a folder of images. Returns the images,
 // inputs in the order given, each folder's images sorted by path. Throws
 // InputError naming the input when it does not exist, is a file that is not an

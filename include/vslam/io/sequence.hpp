@@ -42,14 +42,23 @@ class Sequence {
   std::vector<FrameEntry> frames;
   std::vector<StampedPose> groundtruth;  // T_wc; KITTI: one per frame, timestamp = times.txt
   std::string groundtruth_path;          // "" when the sequence has none
+  // Frames the catalogue knows the named sequence to have (tum/..., kitti/NN),
+  // 0 when unknown (a folder given by path, or a count not in the catalogue).
+  int frames_expected = 0;
 
   bool hasGroundTruth() const { return !groundtruth.empty(); }
   bool hasDepth() const;  // every frame has a depth image
   int framesWithDepth() const;
 
+  // Throws InputError naming the first colour image (and, with_depth, paired
+  // depth image) of frames [begin, end) that is missing or empty, and the list
+  // line naming it: checked before a run starts, so that it fails before any work.
+  void checkFilesPresent(size_t begin, size_t end, bool with_depth) const;
+
   // Images are decoded on demand; each throws InputError naming the image file
   // (and the rgb.txt line that lists it) when it is missing, unreadable, or of
-  // another size than the camera's.
+  // another size than the camera's: FrameUnreadable when the file itself is
+  // bad (missing, undecodable, truncated), which a run skips as one bad frame.
   cv::Mat loadColor(size_t i) const;        // CV_8UC3 BGR (grey images converted)
   cv::Mat loadGray(size_t i) const;         // CV_8UC1
   // CV_32F metres (0 = no measurement); the file must be 16-bit and of the size
@@ -61,6 +70,12 @@ class Sequence {
   // that file's, not here against the camera's.
   cv::Mat readImage(const std::string& path, int imread_flags, int list_line, const char* what,
                     const std::string& size_of = "") const;
+};
+
+// One image file that cannot be read: missing, undecodable or truncated.
+class FrameUnreadable : public InputError {
+ public:
+  using InputError::InputError;
 };
 
 // Thrown by openSequence when a named sequence is in none of the data roots.

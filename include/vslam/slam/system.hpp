@@ -2,6 +2,7 @@
 // The System facade: owns the map, runs Tracking on the caller's thread and
 // Local Mapping on its own (or synchronously in deterministic mode), and gives
 // back trajectories and the map for export.
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <set>
@@ -37,6 +38,14 @@ struct SystemOptions {
   // may be empty. For observers such as tests; an exception thrown here stops
   // Local Mapping like any other and reaches the caller of processFrame/finish.
   std::function<void(long)> after_keyframe_mapped;
+};
+
+// How a run ends (System::finish).
+struct FinishOptions {
+  bool final_ba = true;  // false: no final BA even when config.loop.final_ba (an interrupted run)
+  // Set by another thread (or a signal handler): the final BA stops after its
+  // current iteration and its result is dropped, the map left as it was.
+  const std::atomic<bool>* abort_final_ba = nullptr;
 };
 
 struct ExportedMapPoint {
@@ -102,8 +111,9 @@ class System {
   // Does nothing without a detector or when that frame was already submitted.
   void submitAhead(int index, const cv::Mat& image);
   // Lets Local Mapping and Loop Closing finish their queues, stops the
-  // threads, then runs the final full bundle adjustment (config.loop.final_ba).
-  void finish();
+  // threads, then runs the final full bundle adjustment (config.loop.final_ba
+  // and options.final_ba). Returns true when a final BA result was merged.
+  bool finish(const FinishOptions& options = FinishOptions());
 
   std::vector<StampedPose> frameTrajectory() const;     // every tracked frame, T_wc
   std::vector<StampedPose> keyframeTrajectory() const;  // live keyframes, T_wc

@@ -8,7 +8,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -17,6 +19,7 @@
 #include "vslam/core/error.hpp"
 
 #include "vslam/eval/ate.hpp"
+#include "vslam/eval/kitti_odometry_metric.hpp"
 #include "vslam/eval/rpe.hpp"
 #include "vslam/io/ply.hpp"
 #include "vslam/io/trajectory_io.hpp"
@@ -159,6 +162,48 @@ void writeRunGroundTruth(const std::string& path, const Sequence& sequence, doub
   writeTumTrajectory(path, span);
 }
 
+// KITTI outputs beside the TUM files: trajectory_kitti.txt (12 numbers a line,
+// what the KITTI devkit and `evo_ape kitti` read), trajectory_kitti_frames.txt
+// (the frame of each line: lost frames have no line, none is invented), and
+// groundtruth_kitti.txt (+ _frames) holding the ground truth of exactly those
+// frames, line for line. Returns the report's "kitti_trajectory".
+nlohmann::json writeKittiOutputs(const std::string& out_dir, const Sequence& sequence,
+                                 const std::vector<StampedPose>& trajectory, const std::vector<int>& frames,
+                                 size_t begin, size_t end) {
+  writeKittiTrajectory(out_dir + "/trajectory_kitti.txt", trajectory);
+  writeFrameIndexFile(out_dir + "/trajectory_kitti_frames.txt", frames);
+  nlohmann::json json = {{"file", "trajectory_kitti.txt"},
+                         {"frames_file", "trajectory_kitti_frames.txt"},
+                         {"poses", trajectory.size()},
+                         {"frames_in_run", end - begin},
+                         {"frames_without_pose", (end - begin) - trajectory.size()}};
+  if (sequence.hasGroundTruth()) {
+    std::vector<StampedPose> groundtruth;
+    for (int frame : frames) groundtruth.push_back(sequence.groundtruth[frame]);
+    writeKittiTrajectory(out_dir + "/groundtruth_kitti.txt", groundtruth);
+    writeFrameIndexFile(out_dir + "/groundtruth_kitti_frames.txt", frames);
+    json["groundtruth_file"] = "groundtruth_kitti.txt";
+  }
+  return json;
+}
+
+// The KITTI odometry benchmark's error over the run's frames [begin, end), the
+// estimate scaled by `scale` (a monocular run's ATE Sim(3) scale).
+nlohmann::json kittiOdometryJson(const Sequence& sequence, const std::vector<StampedPose>& trajectory,
+                                 const std::vector<int>& frames, size_t begin, size_t end, bool mono, double scale) {
+  std::vector<SE3> groundtruth;
+  for (size_t k = begin; k < end; ++k) groundtruth.push_back(sequence.groundtruth[k].T_wc);
+  std::vector<std::optional<SE3>> estimate(groundtruth.size());
+  for (size_t i = 0; i < trajectory.size(); ++i) estimate[frames[i] - begin] = trajectory[i].T_wc;
+  KittiOdometryOptions options;
+  options.scale = scale;
+  nlohmann::json json = toJson(computeKittiOdometryError(groundtruth, estimate, options));
+  json["alignment"] = mono ? "sim3" : "none";
+  json["scale"] = scale;
+  json["first_frame"] = begin;
+  return json;
+}
+
 // A failure here is a warning: the run's other outputs are already written.
 void renderRun(const std::string& out_dir) {
   try {
@@ -279,6 +324,13 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   const std::vector<StampedPose> keyframes = system.keyframeTrajectory();
   writeTumTrajectory(out_dir + "/trajectory.txt", trajectory);
   writeTumTrajectory(out_dir + "/keyframes.txt", keyframes);
+  const bool kitti = sequence.kind == SequenceKind::Kitti;
+  std::vector<int> trajectory_frames;  // KITTI: the frame of each pose, by its timestamp (times.txt increases)
+  if (kitti) {
+    std::map<double, int> frame_at;
+    for (size_t k = begin; k < end; ++k) frame_at[sequence.frames[k].timestamp] = sequence.frames[k].index;
+    for (const StampedPose& pose : trajectory) trajectory_frames.push_back(frame_at.at(pose.timestamp));
+  }
 
   std::vector<PlyPoint> cloud;
   for (const ExportedMapPoint& point : system.mapPoints()) cloud.push_back({point.position, point.bgr, point.class_id});
@@ -343,6 +395,18 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
       spdlog::warn("no ATE before the final BA: {}", error.what());
     }
   }
+  if (kitti) {
+    report["kitti_trajectory"] = writeKittiOutputs(out_dir, sequence, trajectory, trajectory_frames, begin, end);
+    report["kitti_odometry"] = nullptr;
+    if (!sequence.hasGroundTruth())
+      report["kitti_odometry_unavailable"] = "the sequence has no ground truth";
+    else if (mono && !report["ate"].is_object())
+      report["kitti_odometry_unavailable"] = "no Sim(3) alignment for this monocular run (no ATE)";
+    else
+      report["kitti_odometry"] =
+          kittiOdometryJson(sequence, trajectory, trajectory_frames, begin, end, mono,
+                            mono ? report["ate"]["frames"]["scale"].get<double>() : 1.0);
+  }
   report["final_ba"] = sequence.config.loop.final_ba;
   report["relocalisations"] = stats.relocalisations;
   nlohmann::json loops = nlohmann::json::array();
@@ -387,6 +451,18 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
     std::printf("ATE RMSE before final BA: keyframes %.4f m, frames %.4f m\n",
                 report["ate_before_final_ba"]["keyframes"]["rmse_m"].get<double>(),
                 report["ate_before_final_ba"]["frames"]["rmse_m"].get<double>());
+  if (report.contains("kitti_odometry")) {
+    const nlohmann::json& metric = report["kitti_odometry"];
+    if (metric.is_object() && metric["available"].get<bool>())
+      std::printf("KITTI odometry:     translation %.4f %%, rotation %.4f deg/100m (%d subsequences of 100-800 m%s)\n",
+                  metric["translation_error_pct"].get<double>(), metric["rotation_error_deg_per_100m"].get<double>(),
+                  metric["subsequences"].get<int>(), mono ? ", Sim(3) scale" : "");
+    else
+      std::cout << "KITTI odometry:     none ("
+                << (metric.is_object() ? metric["reason"].get<std::string>()
+                                       : report["kitti_odometry_unavailable"].get<std::string>())
+                << ")\n";
+  }
   std::cout << "loops closed: " << loops.size() << ", relocalisations: " << stats.relocalisations << "\n";
   const auto summary = system.timer().summary();
   // "Tracking" per frame includes feature extraction, as ORB-SLAM reports it.

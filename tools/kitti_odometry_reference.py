@@ -5,6 +5,7 @@ calcSequenceErrors), in plain Python without numpy, to check `vslam eval
 --kitti-metrics`. Shares no code with vslam.
 
     kitti_odometry_reference.py GT.txt EST.txt [--scale S] [--lengths 100,200,...] [--stable-angle]
+                                [--est-frames EST_frames.txt]
 
 Both files in KITTI format, one pose per frame (line i is frame i). Prints the
 number of subsequences, the mean translational error in % and the mean
@@ -39,6 +40,8 @@ def main():
     parser.add_argument("gt")
     parser.add_argument("est")
     parser.add_argument("--scale", type=float, default=1.0)
+    parser.add_argument("--est-frames", help="frame index file of EST (line i of EST is frame N_i); subsequences "
+                        "with an end frame missing from EST are skipped (the devkit itself needs every frame)")
     parser.add_argument("--lengths", default="100,200,300,400,500,600,700,800")
     parser.add_argument("--stable-angle", action="store_true",
                         help="angle by atan2 instead of the devkit's acos (which has a floor of ~1e-4 rad "
@@ -46,10 +49,17 @@ def main():
     args = parser.parse_args()
     gt = read_poses(args.gt)
     est = read_poses(args.est)
+    if args.est_frames:
+        with open(args.est_frames) as f:
+            frames = [int(line) for line in f if line.strip()]
+        by_frame = [None] * len(gt)
+        for frame, pose in zip(frames, est):
+            by_frame[frame] = pose
+        est = by_frame
     assert len(gt) == len(est), "one pose per frame in both files"
     lengths = [float(x) for x in args.lengths.split(",")]
     for p in est:
-        for i in range(3):
+        for i in range(3 if p else 0):
             p[i][3] *= args.scale
     dist = [0.0]
     for i in range(1, len(gt)):
@@ -58,7 +68,7 @@ def main():
     for first in range(0, len(gt), 10):
         for length in lengths:
             last = next((i for i in range(first, len(gt)) if dist[i] > dist[first] + length), -1)
-            if last == -1:
+            if last == -1 or est[first] is None or est[last] is None:
                 continue
             delta_gt = mul(inv(gt[first]), gt[last])
             delta_est = mul(inv(est[first]), est[last])

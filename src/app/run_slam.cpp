@@ -454,9 +454,11 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   if (report.contains("kitti_odometry")) {
     const nlohmann::json& metric = report["kitti_odometry"];
     if (metric.is_object() && metric["available"].get<bool>())
-      std::printf("KITTI odometry:     translation %.4f %%, rotation %.4f deg/100m (%d subsequences of 100-800 m%s)\n",
+      std::printf("KITTI odometry:     translation %.4f %%, rotation %.4f deg/100m (%d subsequences of 100-800 m "
+                  "scored, %d with an untracked end%s)\n",
                   metric["translation_error_pct"].get<double>(), metric["rotation_error_deg_per_100m"].get<double>(),
-                  metric["subsequences"].get<int>(), mono ? ", Sim(3) scale" : "");
+                  metric["subsequences"].get<int>(), metric["subsequences_without_estimate"].get<int>(),
+                  mono ? "; Sim(3) scale" : "");
     else
       std::cout << "KITTI odometry:     none ("
                 << (metric.is_object() ? metric["reason"].get<std::string>()

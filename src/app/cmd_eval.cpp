@@ -1,9 +1,12 @@
-// `vslam eval`: scores an estimated trajectory against ground truth (ATE and RPE).
+// `vslam eval`: scores an estimated trajectory against ground truth (ATE, RPE,
+// and for KITTI files the KITTI odometry benchmark's error).
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <spdlog/spdlog.h>
@@ -12,6 +15,7 @@
 #include "commands.hpp"
 #include "vslam/core/error.hpp"
 #include "vslam/eval/ate.hpp"
+#include "vslam/eval/kitti_odometry_metric.hpp"
 #include "vslam/eval/rpe.hpp"
 #include "vslam/io/trajectory_io.hpp"
 
@@ -26,12 +30,59 @@ struct EvalOptions {
   std::string json_path;
   double max_dt = 0.02;
   double rpe_delta = 0.0;  // 0 = 1 s (TUM) or 100 m (KITTI)
+  bool kitti_metrics = false;
+  std::vector<double> kitti_lengths;  // empty: the benchmark's 100, 200, ..., 800 m
 };
 
-std::vector<StampedPose> readTrajectory(const std::string& path, const std::string& format) {
-  std::vector<StampedPose> poses = format == "kitti" ? readKittiTrajectory(path) : readTumTrajectory(path);
-  if (poses.empty()) throw InputError(path, 0, "holds no poses");
-  return poses;
+// A trajectory file's poses and, for KITTI files, the frame of each line.
+struct TrajectoryFile {
+  std::vector<StampedPose> poses;
+  std::vector<int> frames;     // KITTI: from the frame index file beside it, else line i is frame i
+  std::string frames_path;     // the frame index file read, "" if none
+};
+
+TrajectoryFile readTrajectory(const std::string& path, const std::string& format) {
+  TrajectoryFile file;
+  if (format != "kitti") {
+    file.poses = readTumTrajectory(path);
+  } else {
+    try {
+      file.poses = readKittiTrajectory(path);
+    } catch (const InputError& e) {
+      // A run folder's trajectory.txt is TUM; its KITTI twin is beside it.
+      const std::filesystem::path twin = std::filesystem::path(path).parent_path() / "trajectory_kitti.txt";
+      if (std::filesystem::path(path).filename() == "trajectory.txt" && std::filesystem::exists(twin))
+        throw InputError(std::string(e.what()) + "; the run's KITTI-format trajectory is " + twin.string());
+      throw;
+    }
+    const std::string frames_path = kittiFrameIndexPath(path);
+    if (std::filesystem::exists(frames_path)) {
+      file.frames = readFrameIndexFile(frames_path);
+      file.frames_path = frames_path;
+      if (file.frames.size() != file.poses.size())
+        throw InputError(frames_path, 0,
+                         "lists " + std::to_string(file.frames.size()) + " frames but " + path + " has " +
+                             std::to_string(file.poses.size()) + " poses (one frame index a pose expected)");
+    } else {
+      for (size_t i = 0; i < file.poses.size(); ++i) file.frames.push_back(static_cast<int>(i));
+    }
+  }
+  if (file.poses.empty()) throw InputError(path, 0, "holds no poses");
+  return file;
+}
+
+// The poses of the frames both files have, in frame order, so that line k of
+// one pairs with line k of the other.
+void pairByFrame(const TrajectoryFile& estimate, const TrajectoryFile& groundtruth,
+                 std::vector<StampedPose>& estimate_paired, std::vector<StampedPose>& groundtruth_paired) {
+  size_t g = 0;
+  for (size_t e = 0; e < estimate.poses.size(); ++e) {
+    while (g < groundtruth.frames.size() && groundtruth.frames[g] < estimate.frames[e]) ++g;
+    if (g == groundtruth.frames.size()) break;
+    if (groundtruth.frames[g] != estimate.frames[e]) continue;
+    estimate_paired.push_back(estimate.poses[e]);
+    groundtruth_paired.push_back(groundtruth.poses[g]);
+  }
 }
 
 std::string number(double value) {
@@ -70,13 +121,89 @@ Alignment chooseAlignment(const EvalOptions& options, std::string& why) {
   throw InputError(report.string(), 0, "has no \"mode\" of mono or rgbd; pass --align se3|sim3");
 }
 
+std::string lengthsText(const std::vector<double>& lengths) {
+  std::string text;
+  for (double length : lengths) {
+    char value[32];
+    std::snprintf(value, sizeof(value), "%g", length);
+    text += (text.empty() ? "" : ", ") + std::string(value);
+  }
+  return text + " m";
+}
+
+// The KITTI odometry benchmark's error over the ground truth's frames; `scale`
+// is the ATE's Sim(3) scale for a monocular estimate, else 1.
+KittiOdometryResult kittiMetrics(const EvalOptions& options, const TrajectoryFile& estimate,
+                                 const TrajectoryFile& groundtruth, double scale) {
+  const int first_frame = groundtruth.frames.front();
+  for (size_t k = 0; k < groundtruth.frames.size(); ++k)
+    if (groundtruth.frames[k] != first_frame + static_cast<int>(k))
+      throw InputError(groundtruth.frames_path, static_cast<int>(k + 1),
+                       "--kitti-metrics needs the ground truth of every frame, and frame " +
+                           std::to_string(first_frame + k) + " is missing (pass the sequence's poses/NN.txt)");
+  std::vector<SE3> groundtruth_poses;
+  for (const StampedPose& pose : groundtruth.poses) groundtruth_poses.push_back(pose.T_wc);
+  std::vector<std::optional<SE3>> estimate_poses(groundtruth_poses.size());
+  for (size_t e = 0; e < estimate.poses.size(); ++e) {
+    const int k = estimate.frames[e] - first_frame;
+    if (k >= 0 && k < static_cast<int>(estimate_poses.size())) estimate_poses[k] = estimate.poses[e].T_wc;
+  }
+  KittiOdometryOptions metric_options;
+  if (!options.kitti_lengths.empty()) metric_options.lengths_m = options.kitti_lengths;
+  metric_options.scale = scale;
+  return computeKittiOdometryError(groundtruth_poses, estimate_poses, metric_options);
+}
+
+void printKittiMetrics(const KittiOdometryResult& result, Alignment alignment, double scale) {
+  std::cout << "KITTI odometry (" << (result.standard_lengths ? "the benchmark's" : "NON-STANDARD") << " lengths "
+            << lengthsText(result.lengths_m) << ", a subsequence every 10 frames";
+  if (alignment == Alignment::Sim3)
+    std::cout << "; Sim(3)-aligned first: estimate scaled by " << number(scale)
+              << ", the ATE's scale, as monocular results are quoted";
+  std::cout << "): ";
+  if (!result.available) {
+    std::cout << "none (" << result.unavailable_reason << ")\n";
+    return;
+  }
+  std::cout << "translation " << number(result.translation_error_pct) << " %, rotation "
+            << number(result.rotation_error_deg_per_100m) << " deg/100m over " << result.subsequences
+            << " subsequences";
+  for (const KittiLengthError& length : result.per_length) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%g m", length.length_m);
+    std::cout << (&length == &result.per_length.front() ? " (" : ", ") << text << ": " << length.subsequences;
+  }
+  std::cout << ")";
+  if (result.subsequences_without_estimate > 0)
+    std::cout << "; " << result.subsequences_without_estimate
+              << " more not scored: their first or last frame has no estimate";
+  std::cout << "\n";
+  if (!result.standard_lengths)
+    std::cout << "note: not comparable with KITTI benchmark figures, which use 100, 200, ..., 800 m\n";
+}
+
 int run(const EvalOptions& options) {
   const bool kitti = options.format == "kitti";
-  const std::vector<StampedPose> estimate = readTrajectory(options.estimate_path, options.format);
-  const std::vector<StampedPose> groundtruth = readTrajectory(options.groundtruth_path, options.format);
-  if (kitti && estimate.size() != groundtruth.size())
-    spdlog::warn("{} has {} poses and {} has {}; pairing the first {} by index", options.estimate_path, estimate.size(),
-                 options.groundtruth_path, groundtruth.size(), std::min(estimate.size(), groundtruth.size()));
+  if (options.kitti_metrics && !kitti)
+    throw InputError("--kitti-metrics needs --format kitti (KITTI trajectories, paired by frame)");
+  const TrajectoryFile estimate_file = readTrajectory(options.estimate_path, options.format);
+  const TrajectoryFile groundtruth_file = readTrajectory(options.groundtruth_path, options.format);
+  std::vector<StampedPose> estimate = estimate_file.poses, groundtruth = groundtruth_file.poses;
+  if (kitti) {
+    estimate.clear();
+    groundtruth.clear();
+    pairByFrame(estimate_file, groundtruth_file, estimate, groundtruth);
+    if (!estimate_file.frames_path.empty() || !groundtruth_file.frames_path.empty())
+      std::cout << "paired by frame (" << (estimate_file.frames_path.empty() ? groundtruth_file.frames_path
+                                                                               : estimate_file.frames_path)
+                << "): " << estimate.size() << " of " << estimate_file.poses.size()
+                << " estimated poses have ground truth\n";
+    else if (estimate_file.poses.size() != groundtruth_file.poses.size())
+      spdlog::warn("{} has {} poses and {} has {}, and no frame index file ({}) says which frames they are; "
+                   "pairing the first {} by line",
+                   options.estimate_path, estimate_file.poses.size(), options.groundtruth_path,
+                   groundtruth_file.poses.size(), kittiFrameIndexPath(options.estimate_path), estimate.size());
+  }
 
   AteOptions ate_options;
   std::string why;
@@ -98,6 +225,8 @@ int run(const EvalOptions& options) {
   rpe_options.delta = options.rpe_delta > 0 ? options.rpe_delta : (kitti ? 100.0 : 1.0);
   rpe_options.scale = ate.scale;  // 1 unless Sim(3): a monocular estimate's metric scale
   const RpeResult rpe = computeRpe(estimate, groundtruth, rpe_options);
+  std::optional<KittiOdometryResult> kitti_result;
+  if (options.kitti_metrics) kitti_result = kittiMetrics(options, estimate_file, groundtruth_file, ate.scale);
 
   std::cout << "ATE (" << toString(ate_options.alignment) << " alignment, " << ate.pairs << " pairs of "
             << estimate.size() << " estimated poses): rmse " << number(ate.rmse_m) << " m, mean " << number(ate.mean_m)
@@ -111,6 +240,8 @@ int run(const EvalOptions& options) {
               << number(rpe.rot_mean_deg) << " " << rpe.rot_units << "\n";
   else
     std::cout << "RPE (interval " << delta_text << "): no pose pairs that far apart\n";
+  if (kitti_result)
+    printKittiMetrics(*kitti_result, ate_options.alignment, ate.scale);
 
   if (!options.json_path.empty()) {
     nlohmann::json json = toJson(ate);
@@ -120,6 +251,11 @@ int run(const EvalOptions& options) {
     nlohmann::json rpe_json = toJson(rpe);
     rpe_json["delta"] = rpe_options.delta;
     json["rpe"] = rpe_json;
+    if (kitti_result) {
+      nlohmann::json kitti_json = toJson(*kitti_result);
+      kitti_json["scale"] = ate.scale;  // applied to the estimate (Sim(3) alignment), else 1
+      json["kitti_odometry"] = kitti_json;
+    }
     std::ofstream out(options.json_path);
     if (!(out << json.dump(2) << "\n")) throw InputError(options.json_path, 0, "cannot write file");
   }
@@ -141,7 +277,7 @@ Command addEvalCommand(CLI::App& app) {
       ->capture_default_str();
   cli->add_option("--format", options->format,
                   "File format: tum ('timestamp tx ty tz qx qy qz qw', paired by timestamp) or kitti (12 numbers "
-                  "a line, paired by line)")
+                  "a line, paired by frame: line i is frame i, or as listed in NAME_frames.txt beside NAME.txt)")
       ->check(CLI::IsMember({"tum", "kitti"}))
       ->capture_default_str();
   cli->add_option("--json", options->json_path, "Also write the figures to this JSON file (default: none)");
@@ -152,6 +288,14 @@ Command addEvalCommand(CLI::App& app) {
                   "RPE interval: seconds (tum) or metres (kitti); 0 = 1 s for tum, 100 m for kitti")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  cli->add_flag("--kitti-metrics", options->kitti_metrics,
+                "With --format kitti: the KITTI odometry benchmark's translational (%) and rotational (deg/100m) "
+                "errors over subsequences of 100, 200, ..., 800 m (after the Sim(3) scale for a monocular run)");
+  cli->add_option("--kitti-lengths", options->kitti_lengths,
+                  "Subsequence lengths in metres for --kitti-metrics instead of 100,...,800 (NON-STANDARD: said "
+                  "so in the output; for sequences shorter than 100 m)")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
   command.cli = cli;
   command.run = [options] { return run(*options); };
   return command;

@@ -10,8 +10,10 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -20,6 +22,7 @@
 #include "stop_signal.hpp"
 #include "vslam/core/error.hpp"
 #include "vslam/eval/ate.hpp"
+#include "vslam/eval/kitti_odometry_metric.hpp"
 #include "vslam/eval/rpe.hpp"
 #include "vslam/io/atomic_file.hpp"
 #include "vslam/io/ply.hpp"
@@ -194,6 +197,54 @@ void writeRunGroundTruth(const std::string& path, const Sequence& sequence, doub
   for (const StampedPose& pose : sequence.groundtruth)
     if (pose.timestamp >= first_t - kMargin && pose.timestamp <= last_t + kMargin) span.push_back(pose);
   writeTrajectoryFile(path, span);
+}
+
+// KITTI outputs beside the TUM files: trajectory_kitti.txt (12 numbers a line,
+// what the KITTI devkit and `evo_ape kitti` read), trajectory_kitti_frames.txt
+// (the frame of each line: lost frames have no line, none is invented), and
+// groundtruth_kitti.txt (+ _frames) holding the ground truth of exactly those
+// frames, line for line. Returns the report's "kitti_trajectory".
+nlohmann::json writeKittiOutputs(const std::string& out_dir, const Sequence& sequence,
+                                 const std::vector<StampedPose>& trajectory, const std::vector<int>& frames,
+                                 size_t begin, size_t end) {
+  auto writeKitti = [](const std::string& path, const std::vector<StampedPose>& poses) {
+    writeFileAtomically(path, [&](const std::string& temporary) { writeKittiTrajectory(temporary, poses); });
+  };
+  auto writeFrames = [](const std::string& path, const std::vector<int>& frame_indices) {
+    writeFileAtomically(path, [&](const std::string& temporary) { writeFrameIndexFile(temporary, frame_indices); });
+  };
+  writeKitti(out_dir + "/trajectory_kitti.txt", trajectory);
+  writeFrames(out_dir + "/trajectory_kitti_frames.txt", frames);
+  nlohmann::json json = {{"file", "trajectory_kitti.txt"},
+                         {"frames_file", "trajectory_kitti_frames.txt"},
+                         {"poses", trajectory.size()},
+                         {"frames_in_run", end - begin},
+                         {"frames_without_pose", (end - begin) - trajectory.size()}};
+  if (sequence.hasGroundTruth()) {
+    std::vector<StampedPose> groundtruth;
+    for (int frame : frames) groundtruth.push_back(sequence.groundtruth[frame]);
+    writeKitti(out_dir + "/groundtruth_kitti.txt", groundtruth);
+    writeFrames(out_dir + "/groundtruth_kitti_frames.txt", frames);
+    json["groundtruth_file"] = "groundtruth_kitti.txt";
+  }
+  return json;
+}
+
+// The KITTI odometry benchmark's error over the run's frames [begin, end), the
+// estimate scaled by `scale` (a monocular run's ATE Sim(3) scale).
+nlohmann::json kittiOdometryJson(const Sequence& sequence, const std::vector<StampedPose>& trajectory,
+                                 const std::vector<int>& frames, size_t begin, size_t end, bool mono, double scale) {
+  std::vector<SE3> groundtruth;
+  for (size_t k = begin; k < end; ++k) groundtruth.push_back(sequence.groundtruth[k].T_wc);
+  std::vector<std::optional<SE3>> estimate(groundtruth.size());
+  for (size_t i = 0; i < trajectory.size(); ++i) estimate[frames[i] - begin] = trajectory[i].T_wc;
+  KittiOdometryOptions options;
+  options.scale = scale;
+  nlohmann::json json = toJson(computeKittiOdometryError(groundtruth, estimate, options));
+  json["alignment"] = mono ? "sim3" : "none";
+  json["scale"] = scale;
+  json["first_frame"] = begin;
+  return json;
 }
 
 // A failure here is a warning: the run's other outputs are already written.
@@ -437,6 +488,20 @@ void printSummary(const nlohmann::json& report, System& system, const Sequence& 
     };
     std::cout << "ATE RMSE before final BA: keyframes " << rmse("keyframes") << ", frames " << rmse("frames") << "\n";
   }
+  if (report.contains("kitti_odometry")) {
+    const nlohmann::json& metric = report["kitti_odometry"];
+    if (metric.is_object() && metric["available"].get<bool>())
+      std::printf("KITTI odometry:     translation %.4f %%, rotation %.4f deg/100m (%d subsequences of 100-800 m "
+                  "scored, %d with an untracked end%s)\n",
+                  metric["translation_error_pct"].get<double>(), metric["rotation_error_deg_per_100m"].get<double>(),
+                  metric["subsequences"].get<int>(), metric["subsequences_without_estimate"].get<int>(),
+                  mono ? "; Sim(3) scale" : "");
+    else
+      std::cout << "KITTI odometry:     none ("
+                << (metric.is_object() ? metric["reason"].get<std::string>()
+                                       : report["kitti_odometry_unavailable"].get<std::string>())
+                << ")\n";
+  }
   std::cout << "loops closed: " << report["loops"].size() << ", relocalisations: " << stats.relocalisations << "\n";
   const auto summary = system.timer().summary();
   // "Tracking" per frame includes feature extraction, as ORB-SLAM reports it.
@@ -521,6 +586,13 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
     for (const ExportedMapPoint& point : system.mapPoints()) cloud.push_back({point.position, point.bgr, point.class_id});
     writeFileAtomically(out_dir + "/map.ply", [&](const std::string& temporary) { writeMapPly(temporary, cloud); });
   });
+  const bool kitti = sequence.kind == SequenceKind::Kitti;
+  std::vector<int> trajectory_frames;  // KITTI: the frame of each pose, by its timestamp (times.txt increases)
+  if (kitti) {
+    std::map<double, int> frame_at;
+    for (size_t k = begin; k < end; ++k) frame_at[sequence.frames[k].timestamp] = sequence.frames[k].index;
+    for (const StampedPose& pose : trajectory) trajectory_frames.push_back(frame_at.at(pose.timestamp));
+  }
   const std::vector<ObjectLandmark> objects = system.objectMap();
   write([&] { writeObjectsJson(out_dir + "/objects.json", objects); });
 
@@ -561,6 +633,24 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
     report["groundtruth_file"] = "groundtruth.txt";  // in the run folder
   }
   putAccuracy(report, system, sequence, mono, trajectory, keyframes);
+  if (kitti) {
+    write([&] {
+      report["kitti_trajectory"] = writeKittiOutputs(out_dir, sequence, trajectory, trajectory_frames, begin, end);
+    });
+    report["kitti_odometry"] = nullptr;
+    if (!sequence.hasGroundTruth())
+      report["kitti_odometry_unavailable"] = "the sequence has no ground truth";
+    else if (mono && !(report["ate"].is_object() && report["ate"]["frames"].is_object()))
+      report["kitti_odometry_unavailable"] = "no Sim(3) alignment for this monocular run (no ATE of the frames)";
+    else
+      try {
+        report["kitti_odometry"] =
+            kittiOdometryJson(sequence, trajectory, trajectory_frames, begin, end, mono,
+                              mono ? report["ate"]["frames"]["scale"].get<double>() : 1.0);
+      } catch (const InputError& error) {
+        report["kitti_odometry_unavailable"] = error.what();
+      }
+  }
   report["final_ba"] = outcome.final_ba;
   report["relocalisations"] = stats.relocalisations;
   nlohmann::json loops = nlohmann::json::array();

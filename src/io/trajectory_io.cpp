@@ -1,6 +1,9 @@
 #include "vslam/io/trajectory_io.hpp"
 
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
 #include <memory>
 
 #include "vslam/core/error.hpp"
@@ -107,9 +110,40 @@ void writeKittiTrajectory(const std::string& path, const std::vector<StampedPose
   FilePtr file = openForWriting(path);
   for (const StampedPose& pose : poses) {
     const Mat4 m = pose.T_wc.matrix();
-    for (int k = 0; k < 12; ++k) std::fprintf(file.get(), k == 0 ? "%.9g" : " %.9g", m(k / 4, k % 4));
+    // + 0.0 turns -0 into 0, which reads the same but looks less like a sign error.
+    for (int k = 0; k < 12; ++k) std::fprintf(file.get(), k == 0 ? "%.9g" : " %.9g", m(k / 4, k % 4) + 0.0);
     std::fprintf(file.get(), "\n");
   }
+  finishWriting(file, path);
+}
+
+std::string kittiFrameIndexPath(const std::string& trajectory_path) {
+  const std::filesystem::path path(trajectory_path);
+  return (path.parent_path() / (path.stem().string() + "_frames" + path.extension().string())).string();
+}
+
+std::vector<int> readFrameIndexFile(const std::string& path) {
+  std::vector<int> frames;
+  for (const TextRow& row : readTextRows(path)) {
+    if (row.fields.size() != 1)
+      throw InputError(path, row.line, "expected 1 field (a frame index), found " + std::to_string(row.fields.size()));
+    const std::string& field = row.fields[0];
+    char* end = nullptr;
+    const long value = std::strtol(field.c_str(), &end, 10);
+    if (field.empty() || *end != '\0' || value < 0 || value > std::numeric_limits<int>::max())
+      throw InputError(path, row.line, "frame index '" + field + "' is not a non-negative integer");
+    if (!frames.empty() && value <= frames.back())
+      throw InputError(path, row.line,
+                       "frame index " + field + " does not increase (previous line has " +
+                           std::to_string(frames.back()) + ")");
+    frames.push_back(static_cast<int>(value));
+  }
+  return frames;
+}
+
+void writeFrameIndexFile(const std::string& path, const std::vector<int>& frames) {
+  FilePtr file = openForWriting(path);
+  for (int frame : frames) std::fprintf(file.get(), "%d\n", frame);
   finishWriting(file, path);
 }
 

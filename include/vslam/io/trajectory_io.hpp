@@ -25,4 +25,14 @@ std::vector<StampedPose> readKittiTrajectory(const std::string& path, const std:
 // 12 numbers a line with 9 significant digits; timestamps are not written.
 void writeKittiTrajectory(const std::string& path, const std::vector<StampedPose>& poses);
 
+// A KITTI file holds no frame numbers: line i is frame i. A trajectory with lost
+// frames has fewer lines, and its frame index file says which frame each line is:
+// one 0-based frame index a line (the line of poses/NN.txt), increasing, no header.
+// The index file of "DIR/NAME.txt" is "DIR/NAME_frames.txt".
+std::string kittiFrameIndexPath(const std::string& trajectory_path);
+// Throws InputError naming the line of an entry that is not a non-negative
+// integer or does not increase.
+std::vector<int> readFrameIndexFile(const std::string& path);
+void writeFrameIndexFile(const std::string& path, const std::vector<int>& frames);
+
 }  // namespace vslam

@@ -653,10 +653,19 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   }
   report["final_ba"] = outcome.final_ba;
   report["relocalisations"] = stats.relocalisations;
+  // Where each loop closed: the two keyframes' timestamps (loop keyframes are never culled).
+  std::map<long, double> keyframe_timestamp;
+  for (const ExportedKeyFrame& keyframe : system.keyFrames()) keyframe_timestamp[keyframe.id] = keyframe.timestamp;
+  auto timestampOf = [&](long id) {
+    auto it = keyframe_timestamp.find(id);
+    return it == keyframe_timestamp.end() ? nlohmann::json(nullptr) : nlohmann::json(it->second);
+  };
   nlohmann::json loops = nlohmann::json::array();
   for (const LoopRecord& loop : system.loops())
     loops.push_back({{"current_keyframe", loop.current_keyframe},
                      {"matched_keyframe", loop.matched_keyframe},
+                     {"current_timestamp", timestampOf(loop.current_keyframe)},
+                     {"matched_timestamp", timestampOf(loop.matched_keyframe)},
                      {"scale", loop.scale},
                      {"inliers", loop.inliers}});
   report["loops"] = loops;

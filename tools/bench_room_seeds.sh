@@ -22,7 +22,7 @@ mkdir -p "$out"
 printf '%-5s %-6s %-9s %-10s %s\n' seed loops kf_ate_cm wall_s "loops (current-matched keyframe: ground-truth distance m, scale, matches)"
 for seed in $seeds; do
   room="$out/room-$seed"
-  build/vslam synth --out "$room" --seed "$seed" >/dev/null
+  build/vslam synth --out "$room" --seed "$seed" >"$room.synth.log" 2>&1 || { echo "seed $seed: vslam synth failed, see $room.synth.log" >&2; continue; }
   build/vslam run --seq "$room" --config "$room/camera.yaml" --detector none --no-render --no-final-ba \
     --out "$room/run" "$@" >/dev/null 2>"$room/run.log" || true
   python3 - "$room" "$seed" <<'PY'

@@ -376,7 +376,8 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
       ++created;
     }
   }
-  spdlog::debug("keyframe {}: {} new map points", keyframe->id(), created);
+  spdlog::debug("keyframe {}: {} new map points from {} covisible keyframes", keyframe->id(), created,
+                keyframe->bestCovisibles(neighbours).size());
 }
 
 void LocalMapping::fuseDuplicates(KeyFrame* keyframe) {

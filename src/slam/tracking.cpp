@@ -657,6 +657,8 @@ void Tracking::createKeyFrame(Frame& frame) {
   last_keyframe_ = keyframe;
   last_keyframe_frame_id_ = frame.id;
   ++keyframes_created_;
+  spdlog::debug("keyframe {} from frame {}: {} points tracked{}", keyframe->id(), frame.index, matches_inliers_,
+                last_keyframe_was_weak_ ? " (weak)" : "");
   local_mapping_.insertKeyFrame(keyframe);
 }
 

@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "test_support.hpp"
+#include "cli_test_support.hpp"
 #include "vslam/eval/ate.hpp"
 #include "vslam/io/trajectory_io.hpp"
 
@@ -21,48 +21,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Outcome {
-  int exit_code = -1;
-  std::string out, err;
-};
+using test::contains;
+using test::errorLines;
+using test::quoted;
+using test::slurp;
+using Outcome = test::CliOutcome;
 
-std::string quoted(const std::string& text) { return "'" + text + "'"; }
-
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-// Runs `prefix vslam args` from the project root (as a user would), with no $VSLAM_DATA.
+// Runs `env vslam args` from the project root (as a user would), with no $VSLAM_DATA.
 Outcome vslam(const std::string& args, const std::string& env = "") {
-  // One folder per test and call: ctest may run tests of this file in parallel.
-  static int call = 0;
-  // Suite and name: CliRun and CliEval share test names.
-  const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = test::scratchDir(std::string("cli_io_") + info->test_suite_name() + "_" + info->name() + "_" +
-                                        std::to_string(++call));
-  const std::string command = "cd " + quoted(test::sourceDir().string()) + " && env -u VSLAM_DATA " + env + " " +
-                              quoted(std::string(VSLAM_BINARY_DIR) + "/vslam") + " " + args + " > " +
-                              quoted((dir / "out").string()) + " 2> " + quoted((dir / "err").string());
-  const int status = std::system(command.c_str());
-  Outcome outcome;
-  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  outcome.out = slurp(dir / "out");
-  outcome.err = slurp(dir / "err");
-  return outcome;
-}
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
-
-// Lines of stderr that are not spdlog's "[hh:mm:ss.mmm] [level] ..." logs.
-std::vector<std::string> errorLines(const std::string& err) {
-  std::vector<std::string> lines;
-  std::istringstream in(err);
-  for (std::string line; std::getline(in, line);)
-    if (!line.empty() && line[0] != '[') lines.push_back(line);
-  return lines;
+  return test::runFromProjectRoot(env + " " + test::vslamBinary() + " " + args, test::callDir("cli_io_"));
 }
 
 TEST(CliRun, FindsFr1XyzInTheSharedDataAndReportsIt) {

@@ -15,7 +15,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "test_support.hpp"
+#include "cli_test_support.hpp"
 #include "vslam/eval/ate.hpp"
 #include "vslam/eval/kitti_odometry_metric.hpp"
 #include "vslam/io/trajectory_io.hpp"
@@ -25,36 +25,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Outcome {
-  int exit_code = -1;
-  std::string out, err;
-};
+using test::contains;
+using test::quoted;
+using test::slurp;
+using Outcome = test::CliOutcome;
 
-std::string quoted(const std::string& text) { return "'" + text + "'"; }
-
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
-
-// Runs `vslam args` from the project root, with no $VSLAM_DATA.
 Outcome vslam(const std::string& args) {
-  static int call = 0;
-  const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = test::scratchDir(std::string("app_kitti_") + info->name() + "_" + std::to_string(++call));
-  const std::string command = "cd " + quoted(test::sourceDir().string()) + " && env -u VSLAM_DATA " +
-                              quoted(std::string(VSLAM_BINARY_DIR) + "/vslam") + " " + args + " > " +
-                              quoted((dir / "out").string()) + " 2> " + quoted((dir / "err").string());
-  const int status = std::system(command.c_str());
-  Outcome outcome;
-  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  outcome.out = slurp(dir / "out");
-  outcome.err = slurp(dir / "err");
-  return outcome;
+  return test::runFromProjectRoot(test::vslamBinary() + " " + args, test::callDir("app_kitti_"));
 }
 
 std::string officialPoses() { return (test::sharedData() / "kitti" / "poses" / "00.txt").string(); }

@@ -14,7 +14,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "test_support.hpp"
+#include "cli_test_support.hpp"
 #include "vslam/io/trajectory_io.hpp"
 
 namespace vslam {
@@ -22,47 +22,19 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Outcome {
-  int exit_code = -1;
-  std::string out, err;
-};
+using test::contains;
+using test::errorLines;
+using test::quoted;
+using test::slurp;
+using test::vslamBinary;
+using Outcome = test::CliOutcome;
 
-std::string quoted(const std::string& text) { return "'" + text + "'"; }
-
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
-
-std::string vslamBinary() { return quoted(std::string(VSLAM_BINARY_DIR) + "/vslam"); }
-
-// Runs `shell` from the project root with stdout and stderr into `dir`.
+// Runs `shell` (through bash, so that it may hold several commands) from the project root.
 Outcome runShell(const std::string& shell, const fs::path& dir) {
-  const std::string command = "cd " + quoted(test::sourceDir().string()) + " && env -u VSLAM_DATA bash -c " +
-                              quoted(shell) + " > " + quoted((dir / "out").string()) + " 2> " +
-                              quoted((dir / "err").string());
-  const int status = std::system(command.c_str());
-  Outcome outcome;
-  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  outcome.out = slurp(dir / "out");
-  outcome.err = slurp(dir / "err");
-  return outcome;
+  return test::runFromProjectRoot("bash -c " + quoted(shell), dir);
 }
 
 Outcome vslam(const std::string& args, const fs::path& dir) { return runShell(vslamBinary() + " " + args, dir); }
-
-// Lines of stderr that are not spdlog's "[hh:mm:ss.mmm] [level] ..." logs.
-std::vector<std::string> errorLines(const std::string& err) {
-  std::vector<std::string> lines;
-  std::istringstream in(err);
-  for (std::string line; std::getline(in, line);)
-    if (!line.empty() && line[0] != '[') lines.push_back(line);
-  return lines;
-}
 
 // The first `frames` frames of fr1_xyz as a TUM folder of its own (copied
 // JPEGs, so that the test may break them), with the whole ground truth.

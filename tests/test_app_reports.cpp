@@ -14,7 +14,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "test_support.hpp"
+#include "cli_test_support.hpp"
 #include "vslam/io/trajectory_io.hpp"
 
 namespace vslam {
@@ -25,16 +25,9 @@ namespace fs = std::filesystem;
 const char* const kPngs[] = {"trajectory_top.png", "trajectory_3d.png", "map_colour.png", "map_classes.png",
                              "map_top.png"};
 
-std::string quoted(const std::string& text) { return "'" + text + "'"; }
-
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+using test::contains;
+using test::quoted;
+using test::slurp;
 
 // Runs `command` from the project root; stdout and stderr go to files in `dir`.
 int runFromRoot(const std::string& command, const fs::path& dir) {

@@ -146,5 +146,24 @@ TEST(Config, OrbSlam2SettingsMissingKeyIsNamed) {
   EXPECT_NE(message.find(path), std::string::npos) << message;
 }
 
+// Found by the config fuzz target (docs/FUZZING.md): Camera.width: 1e300 was
+// cast to int (undefined behaviour) and accepted; .inf and .nan were accepted.
+TEST(Config, NumbersOutOfRangeOrNotFiniteAreNamedErrors) {
+  const std::string settings = "%YAML:1.0\nCamera.fx: 500\nCamera.fy: 500\nCamera.cx: 320\nCamera.cy: 240\n";
+  const std::string huge_width = writeFile("huge_width.yaml", settings + "Camera.width: 1e300\n");
+  EXPECT_NE(errorOf(huge_width).find(huge_width + ": key 'Camera.width' must be an integer"), std::string::npos)
+      << errorOf(huge_width);
+  const std::string fraction = writeFile("fraction.yaml", settings + "ORBextractor.nFeatures: 1000.5\n");
+  EXPECT_NE(errorOf(fraction).find("key 'ORBextractor.nFeatures' must be an integer"), std::string::npos)
+      << errorOf(fraction);
+  const std::string whole_real = writeFile("whole_real.yaml", settings + "Camera.width: 640.0\n");
+  EXPECT_EQ(loadConfig(whole_real).camera.width, 640);
+  const std::string infinite = writeFile("infinite.yaml", settings + "Camera.k1: 1e400\n");
+  EXPECT_NE(errorOf(infinite).find("key 'Camera.k1' is not a finite number"), std::string::npos) << errorOf(infinite);
+  const std::string nan = writeFile(
+      "nan.yaml", "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: .nan\n  cx: 320\n  cy: 240\n");
+  EXPECT_NE(errorOf(nan).find(nan + ":5: key 'camera.fy' is not a finite number"), std::string::npos) << errorOf(nan);
+}
+
 }  // namespace
 }  // namespace vslam

@@ -29,9 +29,7 @@ constexpr int kOldestVersion = 1;
 // Reads the file line by line, skipping comments, and reports errors with the line number.
 class LineReader {
  public:
-  explicit LineReader(const std::string& path) : path_(path), in_(path) {
-    if (!in_) throw InputError(path_, 0, "cannot open bundle problem file");
-  }
+  LineReader(std::istream& in, const std::string& path) : path_(path), in_(in) {}
 
   std::istringstream next(const char* what) {
     std::string line;
@@ -62,7 +60,7 @@ class LineReader {
 
  private:
   std::string path_;
-  std::ifstream in_;
+  std::istream& in_;
   int line_number_ = 0;
 };
 
@@ -102,7 +100,13 @@ void saveBundleProblem(const std::string& path, const PinholeCamera& camera, dou
 }
 
 RecordedBundleProblem loadBundleProblem(const std::string& path) {
-  LineReader reader(path);
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "cannot open bundle problem file");
+  return loadBundleProblem(in, path);
+}
+
+RecordedBundleProblem loadBundleProblem(std::istream& in, const std::string& path) {
+  LineReader reader(in, path);
   RecordedBundleProblem recorded;
   int file_version = 0;
   {

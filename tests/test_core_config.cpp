@@ -165,5 +165,17 @@ TEST(Config, NumbersOutOfRangeOrNotFiniteAreNamedErrors) {
   EXPECT_NE(errorOf(nan).find(nan + ":5: key 'camera.fy' is not a finite number"), std::string::npos) << errorOf(nan);
 }
 
+// Found by the config fuzz target: a section that is a scalar or a list let
+// yaml-cpp's BadSubscript escape instead of an InputError.
+TEST(Config, SectionThatIsNotAMappingIsANamedError) {
+  const std::string scalar = writeFile("scalar_camera.yaml", "camera: 3\n");
+  EXPECT_NE(errorOf(scalar).find(scalar + ":1: section 'camera' must be a mapping"), std::string::npos)
+      << errorOf(scalar);
+  const std::string list = writeFile(
+      "list_orb.yaml",
+      "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: 500\n  cx: 320\n  cy: 240\norb: [1, 2]\n");
+  EXPECT_NE(errorOf(list).find(list + ":8: section 'orb' must be a mapping"), std::string::npos) << errorOf(list);
+}
+
 }  // namespace
 }  // namespace vslam

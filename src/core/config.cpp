@@ -31,7 +31,15 @@ class YamlReader {
     if (!root_.IsMap()) throw InputError(path_, 0, "expected a mapping at the top level");
   }
 
-  YAML::Node section(const char* name) const { return root_[name]; }
+  // A section that is there must be a mapping: yaml-cpp throws its own
+  // BadSubscript for a key looked up in a scalar or a list ("camera: 3"; found
+  // by the config fuzz target).
+  YAML::Node section(const char* name) const {
+    const YAML::Node node = root_[name];
+    if (node && !node.IsMap())
+      throw InputError(path_, node.Mark().line + 1, std::string("section '") + name + "' must be a mapping of keys");
+    return node;
+  }
 
   template <typename T>
   void required(const YAML::Node& parent, const std::string& section, const char* key, T& out) const {

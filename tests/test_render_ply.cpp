@@ -143,6 +143,14 @@ TEST(Ply, HeaderCountsAndValuesAreNotTrusted) {
   EXPECT_NE(errorOf(huge_count).find("vertex 0 of 9000000000000000000: unexpected end of file"), std::string::npos)
       << errorOf(huge_count);
 
+  // An ASCII list count of 3e29 was cast to long: undefined behaviour.
+  const std::string huge_list = (dir / "huge_list.ply").string();
+  std::ofstream(huge_list) << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                              "property float z\nproperty list uchar int ids\nend_header\n1 2 3 3e29 1 2\n";
+  EXPECT_NE(errorOf(huge_list).find("vertex 0 of 1: list ids has a count of 299999999999999991891638616064.000000"),
+            std::string::npos)
+      << errorOf(huge_list);
+
   // An element without properties and a count of 9e18 was looped over, reading nothing, 9e18 times.
   const std::string empty_element = (dir / "empty_element.ply").string();
   std::ofstream(empty_element) << "ply\nformat ascii 1.0\nelement face 9000000000000000000\nelement vertex 1\n"

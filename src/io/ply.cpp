@@ -258,7 +258,12 @@ std::vector<PlyPoint> readMapPly(std::istream& in, const std::string& path) {
           values[p] = reader.read(property.type, where);
           continue;
         }
+        // A count read as an ASCII number or declared float (3e29, -1, 2.5)
+        // must not reach the cast to long (found by the ply fuzz target).
         const double items = reader.read(property.count_type, where);
+        if (!(items >= 0 && items == std::trunc(items) && items <= std::numeric_limits<std::uint32_t>::max()))
+          throw InputError(path, 0, where + ": list " + property.name + " has a count of " + std::to_string(items) +
+                                        ", not an integer in 0..4294967295");
         for (long item = 0; item < static_cast<long>(items); ++item) reader.read(property.type, where);
       }
       if (!is_vertex) continue;

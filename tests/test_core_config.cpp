@@ -177,5 +177,15 @@ TEST(Config, SectionThatIsNotAMappingIsANamedError) {
   EXPECT_NE(errorOf(list).find(list + ":8: section 'orb' must be a mapping"), std::string::npos) << errorOf(list);
 }
 
+// Found by the config fuzz target: OpenCV's FileStorage let std::length_error
+// out of this malformed settings file instead of a cv::Exception.
+TEST(Config, OrbSlam2SettingsOpenCvCannotParseIsANamedError) {
+  const std::string invalid_utf8(8, '\xd6');
+  const std::string path = writeFile("opencv_length_error.yaml",
+                                     "%YAML:1.0\nCcamera:\n  \n  fx" + invalid_utf8 +
+                                         "x: 318.6\n  cy: 255.3\n  k1: 0.26\n  :\n  2nam depthm_fr1\nepthm_fr\n1\n");
+  EXPECT_NE(errorOf(path).find(path + ": cannot parse ORB-SLAM settings file"), std::string::npos) << errorOf(path);
+}
+
 }  // namespace
 }  // namespace vslam

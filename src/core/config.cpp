@@ -177,6 +177,10 @@ Config loadOrbSlamSettings(const std::string& text, const std::string& path) {
     fs.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
   } catch (const cv::Exception& e) {
     throw InputError(path, 0, "cannot parse ORB-SLAM settings file: " + e.msg);
+  } catch (const std::exception& e) {
+    // OpenCV's YAML parser lets std::length_error out of some malformed files
+    // (a key of invalid UTF-8 before a bare ':'; found by the config fuzz target).
+    throw InputError(path, 0, std::string("cannot parse ORB-SLAM settings file (malformed YAML: ") + e.what() + ")");
   }
   if (!fs.isOpened()) throw InputError(path, 0, "cannot open ORB-SLAM settings file");
 

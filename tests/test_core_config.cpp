@@ -187,5 +187,12 @@ TEST(Config, OrbSlam2SettingsOpenCvCannotParseIsANamedError) {
   EXPECT_NE(errorOf(path).find(path + ": cannot parse ORB-SLAM settings file"), std::string::npos) << errorOf(path);
 }
 
+// Found by the config fuzz target: a list at the top level made FileStorage's
+// lookup throw a cv::Exception (an assertion) past the reader.
+TEST(Config, OrbSlam2SettingsThatAreAListAreANamedError) {
+  const std::string path = writeFile("orbslam_list.yaml", "%YAML:1.0\n- Camera.fx: 517.3\n- Camera.fy: 516.5\n");
+  EXPECT_NE(errorOf(path).find(path + ": expected a mapping of keys"), std::string::npos) << errorOf(path);
+}
+
 }  // namespace
 }  // namespace vslam

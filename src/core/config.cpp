@@ -183,6 +183,9 @@ Config loadOrbSlamSettings(const std::string& text, const std::string& path) {
     throw InputError(path, 0, std::string("cannot parse ORB-SLAM settings file (malformed YAML: ") + e.what() + ")");
   }
   if (!fs.isOpened()) throw InputError(path, 0, "cannot open ORB-SLAM settings file");
+  // FileStorage asserts (throws cv::Exception) when a key is looked up in a
+  // list ("- Camera.fx: 1"; found by the config fuzz target).
+  if (!fs.root().isMap()) throw InputError(path, 0, "expected a mapping of keys (Camera.fx: ...) at the top level");
 
   auto number = [&](const char* key, double& out, bool required) {
     const cv::FileNode node = fs[key];

@@ -147,5 +147,53 @@ TEST(Config, OrbSlam2SettingsMissingKeyIsNamed) {
   EXPECT_NE(message.find(path), std::string::npos) << message;
 }
 
+// Found by the config fuzz target (docs/FUZZING.md): Camera.width: 1e300 was
+// cast to int (undefined behaviour) and accepted; .inf and .nan were accepted.
+TEST(Config, NumbersOutOfRangeOrNotFiniteAreNamedErrors) {
+  const std::string settings = "%YAML:1.0\nCamera.fx: 500\nCamera.fy: 500\nCamera.cx: 320\nCamera.cy: 240\n";
+  const std::string huge_width = writeFile("huge_width.yaml", settings + "Camera.width: 1e300\n");
+  EXPECT_NE(errorOf(huge_width).find(huge_width + ": key 'Camera.width' must be an integer"), std::string::npos)
+      << errorOf(huge_width);
+  const std::string fraction = writeFile("fraction.yaml", settings + "ORBextractor.nFeatures: 1000.5\n");
+  EXPECT_NE(errorOf(fraction).find("key 'ORBextractor.nFeatures' must be an integer"), std::string::npos)
+      << errorOf(fraction);
+  const std::string whole_real = writeFile("whole_real.yaml", settings + "Camera.width: 640.0\n");
+  EXPECT_EQ(loadConfig(whole_real).camera.width, 640);
+  const std::string infinite = writeFile("infinite.yaml", settings + "Camera.k1: 1e400\n");
+  EXPECT_NE(errorOf(infinite).find("key 'Camera.k1' is not a finite number"), std::string::npos) << errorOf(infinite);
+  const std::string nan = writeFile(
+      "nan.yaml", "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: .nan\n  cx: 320\n  cy: 240\n");
+  EXPECT_NE(errorOf(nan).find(nan + ":5: key 'camera.fy' is not a finite number"), std::string::npos) << errorOf(nan);
+}
+
+// Found by the config fuzz target: a section that is a scalar or a list let
+// yaml-cpp's BadSubscript escape instead of an InputError.
+TEST(Config, SectionThatIsNotAMappingIsANamedError) {
+  const std::string scalar = writeFile("scalar_camera.yaml", "camera: 3\n");
+  EXPECT_NE(errorOf(scalar).find(scalar + ":1: section 'camera' must be a mapping"), std::string::npos)
+      << errorOf(scalar);
+  const std::string list = writeFile(
+      "list_orb.yaml",
+      "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: 500\n  cx: 320\n  cy: 240\norb: [1, 2]\n");
+  EXPECT_NE(errorOf(list).find(list + ":8: section 'orb' must be a mapping"), std::string::npos) << errorOf(list);
+}
+
+// Found by the config fuzz target: OpenCV's FileStorage let std::length_error
+// out of this malformed settings file instead of a cv::Exception.
+TEST(Config, OrbSlam2SettingsOpenCvCannotParseIsANamedError) {
+  const std::string invalid_utf8(8, '\xd6');
+  const std::string path = writeFile("opencv_length_error.yaml",
+                                     "%YAML:1.0\nCcamera:\n  \n  fx" + invalid_utf8 +
+                                         "x: 318.6\n  cy: 255.3\n  k1: 0.26\n  :\n  2nam depthm_fr1\nepthm_fr\n1\n");
+  EXPECT_NE(errorOf(path).find(path + ": cannot parse ORB-SLAM settings file"), std::string::npos) << errorOf(path);
+}
+
+// Found by the config fuzz target: a list at the top level made FileStorage's
+// lookup throw a cv::Exception (an assertion) past the reader.
+TEST(Config, OrbSlam2SettingsThatAreAListAreANamedError) {
+  const std::string path = writeFile("orbslam_list.yaml", "%YAML:1.0\n- Camera.fx: 517.3\n- Camera.fy: 516.5\n");
+  EXPECT_NE(errorOf(path).find(path + ": expected a mapping of keys"), std::string::npos) << errorOf(path);
+}
+
 }  // namespace
 }  // namespace vslam

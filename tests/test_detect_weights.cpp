@@ -129,6 +129,33 @@ TEST(DarknetWeights, CfgErrorsNameFileAndLine) {
   EXPECT_NE(message.find("/nonexistent/x.cfg"), std::string::npos) << message;
 }
 
+// Found by the darknet_cfg and darknet_weights fuzz targets (docs/FUZZING.md):
+// filters * channels * size^2 overflowed int64 and the header's major * 10 +
+// minor overflowed int (undefined behaviour); such a cfg was accepted.
+TEST(DarknetWeights, LayersBeyondAnyRealNetworkAreRefusedNotOverflowed) {
+  const std::string huge = writeFile("weights_huge", "huge.cfg",
+                                     "[net]\nchannels=3\n[convolutional]\nfilters=2000000000\nsize=2000000000\n");
+  std::string message = errorOf([&] { parseDarknetCfg(huge); });
+  EXPECT_NE(message.find(huge + ":3: filters must be at most 65536"), std::string::npos) << message;
+
+  const std::string wide_route = writeFile("weights_wide_route", "route.cfg",
+                                           "[net]\n[convolutional]\nfilters=65536\nsize=1\n[route]\nlayers=-1,-1\n");
+  message = errorOf([&] { parseDarknetCfg(wide_route); });
+  EXPECT_NE(message.find(wide_route + ":5: route gives more than 65536 channels"), std::string::npos) << message;
+
+  std::string many = "[net]\nchannels=65536\n";
+  for (int i = 0; i < 20; ++i) many += "[convolutional]\nfilters=65536\nsize=1024\n";
+  const std::string too_many = writeFile("weights_too_many", "many.cfg", many);
+  message = errorOf([&] { parseDarknetCfg(too_many); });
+  EXPECT_NE(message.find(too_many + ":3: the network needs more than 68719476736 parameters"), std::string::npos)
+      << message;
+
+  // Darknet's rule for the width of `seen`, whatever the version numbers.
+  EXPECT_EQ((DarknetWeightsHeader{2147483647, 2147483647, 0}.bytes()), 16);
+  EXPECT_EQ((DarknetWeightsHeader{-2147483647 - 1, 5, 0}.bytes()), 16);
+  EXPECT_EQ((DarknetWeightsHeader{0, 2, 0}.bytes()), 20);
+}
+
 TEST(DarknetWeights, PlaceholderHasExactlyTheExpectedSize) {
   const fs::path dir = test::scratchDir("weights_placeholder");
   const std::string cfg = (test::sharedModels() / "darknet-cfg/yolov4-tiny.cfg").string();

@@ -2,6 +2,7 @@
 // kind of bad input on small folders made in the scratch directory.
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -10,6 +11,8 @@
 #include "vslam/core/error.hpp"
 #include "vslam/io/sequence.hpp"
 #include "vslam/io/sequence_catalog.hpp"
+#include "vslam/io/sequence_files.hpp"
+#include "vslam/io/text_table.hpp"
 
 namespace vslam {
 namespace {
@@ -444,6 +447,28 @@ TEST(SequenceCatalog, FetchScriptKnowsTheSameNames) {
   std::vector<std::string> from_catalog;
   for (const TumSequenceInfo& info : tumSequences()) from_catalog.push_back("tum/" + info.short_name);
   EXPECT_EQ(from_script, from_catalog);
+}
+
+// Found by the kitti_calib fuzz target (docs/FUZZING.md): a line holding only
+// a form feed passed as a row with no fields, and calib.txt's reader looked at
+// its first field (a null dereference).
+TEST(SequenceFiles, LinesOfOnlyFormFeedsOrVerticalTabsAreBlank) {
+  std::istringstream calib("\f\nP0: 718 0 607 0 0 718 185 0 0 0 1 0\n \v \n\f# comment\n");
+  const std::vector<TextRow> rows = readTextRows(calib, "calib.txt");
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].line, 2);
+  PinholeCamera camera;
+  parseKittiCalibration(rows, "calib.txt", camera);
+  EXPECT_EQ(camera.fx, 718);
+  EXPECT_EQ(camera.cy, 185);
+
+  std::istringstream times("\f\n");
+  try {
+    parseKittiTimes(readTextRows(times, "times.txt"), "times.txt");
+    ADD_FAILURE() << "an empty times.txt was accepted";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "times.txt: lists no timestamps");
+  }
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include <fstream>
 #include <random>
+#include <sstream>
 
 #include <gtest/gtest.h>
 
@@ -391,6 +392,22 @@ TEST(BundleProblemFile, MalformedFileNamesTheLine) {
     FAIL() << "no exception";
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()), path + ":4: malformed keyframe line");
+  }
+}
+
+// Found by the bundle_problem fuzz target (docs/FUZZING.md): the counts were
+// allocated before any record was read, so "keyframes 200000001" asked for
+// 30 GB and a larger count threw std::length_error instead of an InputError.
+TEST(BundleProblemFile, CountsLargerThanTheFileAreAnEndOfFileError) {
+  for (const std::string count : {"200000001", "9000000000000000000"}) {
+    std::istringstream in("vslam_bundle_problem 2\ncamera 500 500 320 240 640 480 0\nkeyframes " + count +
+                          "\n0 1 0 1 0 0 0 1 0 0 0 1 0 0 0\n");
+    try {
+      loadBundleProblem(in, "problem.txt");
+      FAIL() << "no exception";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()), "problem.txt:4: unexpected end of file, expected keyframe");
+    }
   }
 }
 

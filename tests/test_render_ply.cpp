@@ -121,5 +121,44 @@ TEST(Ply, ErrorsNameTheFileAndTheProblem) {
   EXPECT_NE(message.find("truncated"), std::string::npos) << message;
 }
 
+// Found by the ply fuzz target (docs/FUZZING.md).
+TEST(Ply, HeaderCountsAndValuesAreNotTrusted) {
+  const auto dir = test::scratchDir("ply_untrusted");
+  const std::string header = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                             "property float z\nproperty int class_id\nend_header\n";
+  // A class_id beyond int was cast to int: undefined behaviour.
+  const std::string huge_class = (dir / "huge_class.ply").string();
+  std::ofstream(huge_class) << header << "1 2 3 1e30\n";
+  EXPECT_NE(errorOf(huge_class).find(huge_class + ": vertex 0 of 1: class_id 1000000000000000019884624838656.000000 is not an int"),
+            std::string::npos)
+      << errorOf(huge_class);
+  const std::string fraction = (dir / "fraction.ply").string();
+  std::ofstream(fraction) << header << "1 2 3 2.5\n";
+  EXPECT_NE(errorOf(fraction).find("class_id 2.500000 is not an int"), std::string::npos) << errorOf(fraction);
+
+  // A vertex count of 9e18 was reserved up front (std::length_error, not an InputError).
+  const std::string huge_count = (dir / "huge_count.ply").string();
+  std::ofstream(huge_count) << "ply\nformat binary_little_endian 1.0\nelement vertex 9000000000000000000\n"
+                               "property float x\nproperty float y\nproperty float z\nend_header\n";
+  EXPECT_NE(errorOf(huge_count).find("vertex 0 of 9000000000000000000: unexpected end of file"), std::string::npos)
+      << errorOf(huge_count);
+
+  // An ASCII list count of 3e29 was cast to long: undefined behaviour.
+  const std::string huge_list = (dir / "huge_list.ply").string();
+  std::ofstream(huge_list) << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                              "property float z\nproperty list uchar int ids\nend_header\n1 2 3 3e29 1 2\n";
+  EXPECT_NE(errorOf(huge_list).find("vertex 0 of 1: list ids has a count of 299999999999999991891638616064.000000"),
+            std::string::npos)
+      << errorOf(huge_list);
+
+  // An element without properties and a count of 9e18 was looped over, reading nothing, 9e18 times.
+  const std::string empty_element = (dir / "empty_element.ply").string();
+  std::ofstream(empty_element) << "ply\nformat ascii 1.0\nelement face 9000000000000000000\nelement vertex 1\n"
+                                  "property float x\nproperty float y\nproperty float z\nend_header\n4 5 6\n";
+  const std::vector<PlyPoint> points = readMapPly(empty_element);
+  ASSERT_EQ(points.size(), 1u);
+  EXPECT_EQ(points[0].position, Vec3(4, 5, 6));
+}
+
 }  // namespace
 }  // namespace vslam

@@ -1,7 +1,9 @@
 #include "vslam/core/config.hpp"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include <opencv2/core/persistence.hpp>
@@ -20,18 +22,24 @@ class YamlReader {
   explicit YamlReader(std::string path) : path_(std::move(path)) {}
 
   const YAML::Node& root() const { return root_; }
-  void load() {
+  void load(const std::string& text) {
     try {
-      root_ = YAML::LoadFile(path_);
+      root_ = YAML::Load(text);
     } catch (const YAML::ParserException& e) {
       throw InputError(path_, e.mark.line + 1, "YAML syntax error: " + e.msg);
-    } catch (const YAML::BadFile&) {
-      throw InputError(path_, 0, "cannot open config file");
     }
     if (!root_.IsMap()) throw InputError(path_, 0, "expected a mapping at the top level");
   }
 
-  YAML::Node section(const char* name) const { return root_[name]; }
+  // A section that is there must be a mapping: yaml-cpp throws its own
+  // BadSubscript for a key looked up in a scalar or a list ("camera: 3"; found
+  // by the config fuzz target).
+  YAML::Node section(const char* name) const {
+    const YAML::Node node = root_[name];
+    if (node && !node.IsMap())
+      throw InputError(path_, node.Mark().line + 1, std::string("section '") + name + "' must be a mapping of keys");
+    return node;
+  }
 
   template <typename T>
   void required(const YAML::Node& parent, const std::string& section, const char* key, T& out) const {
@@ -62,6 +70,11 @@ class YamlReader {
       throw InputError(path_, node.Mark().line + 1,
                        "key '" + qualified(section, key) + "' has the wrong type (expected " + typeName<T>() + ")");
     }
+    // YAML spells infinity and NaN .inf and .nan; no parameter means either.
+    if constexpr (std::is_same_v<T, double>) {
+      if (!std::isfinite(out))
+        throw InputError(path_, node.Mark().line + 1, "key '" + qualified(section, key) + "' is not a finite number");
+    }
   }
   template <typename T>
   static const char* typeName() {
@@ -76,9 +89,9 @@ class YamlReader {
   YAML::Node root_;
 };
 
-Config loadVslamYaml(const std::string& path) {
+Config loadVslamYaml(const std::string& text, const std::string& path) {
   YamlReader reader(path);
-  reader.load();
+  reader.load(text);
   Config config;
   config.source = path;
 
@@ -158,14 +171,21 @@ Config loadVslamYaml(const std::string& path) {
 }
 
 // ORB-SLAM2 settings files are OpenCV FileStorage YAML ("%YAML:1.0").
-Config loadOrbSlamSettings(const std::string& path) {
+Config loadOrbSlamSettings(const std::string& text, const std::string& path) {
   cv::FileStorage fs;
   try {
-    fs.open(path, cv::FileStorage::READ);
+    fs.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
   } catch (const cv::Exception& e) {
     throw InputError(path, 0, "cannot parse ORB-SLAM settings file: " + e.msg);
+  } catch (const std::exception& e) {
+    // OpenCV's YAML parser lets std::length_error out of some malformed files
+    // (a key of invalid UTF-8 before a bare ':'; found by the config fuzz target).
+    throw InputError(path, 0, std::string("cannot parse ORB-SLAM settings file (malformed YAML: ") + e.what() + ")");
   }
   if (!fs.isOpened()) throw InputError(path, 0, "cannot open ORB-SLAM settings file");
+  // FileStorage asserts (throws cv::Exception) when a key is looked up in a
+  // list ("- Camera.fx: 1"; found by the config fuzz target).
+  if (!fs.root().isMap()) throw InputError(path, 0, "expected a mapping of keys (Camera.fx: ...) at the top level");
 
   auto number = [&](const char* key, double& out, bool required) {
     const cv::FileNode node = fs[key];
@@ -175,11 +195,17 @@ Config loadOrbSlamSettings(const std::string& path) {
     }
     if (!node.isReal() && !node.isInt())
       throw InputError(path, 0, std::string("key '") + key + "' has the wrong type (expected a number)");
-    out = static_cast<double>(node);
+    const double value = static_cast<double>(node);
+    if (!std::isfinite(value)) throw InputError(path, 0, std::string("key '") + key + "' is not a finite number");
+    out = value;
   };
+  // Settings files may write integers as reals ("640.0"); a fraction or a
+  // value beyond int is an error, not a silent cast.
   auto integer = [&](const char* key, int& out) {
     double v = out;
     number(key, v, false);
+    if (v != std::trunc(v) || v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max())
+      throw InputError(path, 0, std::string("key '") + key + "' must be an integer, got " + std::to_string(v));
     out = static_cast<int>(v);
   };
 
@@ -198,12 +224,9 @@ Config loadOrbSlamSettings(const std::string& path) {
   number("Camera.p2", c.p2, false);
   number("Camera.k3", c.k3, false);
   number("Camera.fps", c.fps, false);
-  double width = 0, height = 0;
-  number("Camera.width", width, false);
-  number("Camera.height", height, false);
   // ORB-SLAM2's TUM files omit the image size; the reader fills it from the first image.
-  c.width = static_cast<int>(width);
-  c.height = static_cast<int>(height);
+  integer("Camera.width", c.width);
+  integer("Camera.height", c.height);
   number("DepthMapFactor", c.depth_factor, false);
   number("Camera.bf", c.bf, false);
   number("ThDepth", c.th_depth, false);
@@ -219,13 +242,18 @@ Config loadOrbSlamSettings(const std::string& path) {
 }  // namespace
 
 Config loadConfig(const std::string& path) {
-  std::ifstream in(path);
+  if (fs::is_directory(path)) throw InputError(path, 0, "is a directory, not a config file");
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, 0, "cannot open config file");
-  std::string first_line;
-  std::getline(in, first_line);
-  if (first_line.rfind("%YAML:", 0) == 0) return loadOrbSlamSettings(path);
-  in.close();
-  return loadVslamYaml(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError(path, 0, "read error");
+  return parseConfig(text.str(), path);
+}
+
+Config parseConfig(const std::string& text, const std::string& source) {
+  if (text.rfind("%YAML:", 0) == 0) return loadOrbSlamSettings(text, source);
+  return loadVslamYaml(text, source);
 }
 
 void requireDepthCamera(const Config& config) {

@@ -12,6 +12,13 @@
 namespace vslam {
 namespace {
 
+// Bounds far above any real network (yolov4 has 1024 filters, kernels of 1-7)
+// that keep the parameter arithmetic inside int64: a cfg beyond them is an
+// error, not an overflow (found by the darknet_cfg fuzz target).
+constexpr int kMaxChannels = 1 << 16;
+constexpr int kMaxKernelSize = 1 << 10;
+constexpr std::int64_t kMaxParameters = std::int64_t{1} << 36;  // 256 GB of float32
+
 std::string trim(const std::string& text) {
   const auto first = text.find_first_not_of(" \t\r\n");
   if (first == std::string::npos) return "";
@@ -26,9 +33,7 @@ struct CfgSection {
   std::map<std::string, std::pair<std::string, int>> options;  // key -> (value, line)
 };
 
-std::vector<CfgSection> readSections(const std::string& cfg_path) {
-  std::ifstream in(cfg_path);
-  if (!in) throw InputError(cfg_path, 0, "cannot open Darknet cfg file");
+std::vector<CfgSection> readSections(std::istream& in, const std::string& cfg_path) {
   std::vector<CfgSection> sections;
   std::string raw;
   int line_number = 0;
@@ -117,7 +122,13 @@ int DarknetNetwork::yoloLayerCount() const {
 }
 
 DarknetNetwork parseDarknetCfg(const std::string& cfg_path) {
-  const std::vector<CfgSection> sections = readSections(cfg_path);
+  std::ifstream in(cfg_path);
+  if (!in) throw InputError(cfg_path, 0, "cannot open Darknet cfg file");
+  return parseDarknetCfg(in, cfg_path);
+}
+
+DarknetNetwork parseDarknetCfg(std::istream& in, const std::string& cfg_path) {
+  const std::vector<CfgSection> sections = readSections(in, cfg_path);
   DarknetNetwork network;
   network.cfg_path = cfg_path;
   {
@@ -125,7 +136,8 @@ DarknetNetwork parseDarknetCfg(const std::string& cfg_path) {
     network.width = net.integer("width", 0);
     network.height = net.integer("height", 0);
     network.channels = net.integer("channels", 3);
-    if (network.channels <= 0) net.fail("[net] channels must be positive");
+    if (network.channels <= 0 || network.channels > kMaxChannels)
+      net.fail("[net] channels must be in 1.." + std::to_string(kMaxChannels));
   }
 
   for (size_t s = 1; s < sections.size(); ++s) {
@@ -144,6 +156,9 @@ DarknetNetwork parseDarknetCfg(const std::string& cfg_path) {
       const int groups = reader.integer("groups", 1);
       layer.batch_normalize = reader.integer("batch_normalize", 0) != 0;
       if (layer.filters <= 0 || size <= 0 || groups <= 0) reader.fail("filters, size and groups must be positive");
+      if (layer.filters > kMaxChannels || size > kMaxKernelSize)
+        reader.fail("filters must be at most " + std::to_string(kMaxChannels) + " and size at most " +
+                    std::to_string(kMaxKernelSize));
       if (in_channels % groups != 0)
         reader.fail(std::to_string(in_channels) + " input channels do not split into " + std::to_string(groups) +
                     " groups");
@@ -159,8 +174,10 @@ DarknetNetwork parseDarknetCfg(const std::string& cfg_path) {
       const int group_id = reader.integer("group_id", 0);
       if (groups <= 0 || group_id < 0 || group_id >= groups) reader.fail("route needs 0 <= group_id < groups");
       int channels = 0;
-      for (int reference : references)
+      for (int reference : references) {
         channels += network.layers[referencedLayer(reader, reference, index)].out_channels;
+        if (channels > kMaxChannels) reader.fail("route gives more than " + std::to_string(kMaxChannels) + " channels");
+      }
       if (channels % groups != 0)
         reader.fail(std::to_string(channels) + " routed channels do not split into " + std::to_string(groups) +
                     " groups");
@@ -186,19 +203,26 @@ DarknetNetwork parseDarknetCfg(const std::string& cfg_path) {
       reader.fail("unsupported section [" + section.name + "]");
     }
     network.layers.push_back(layer);
+    if (network.parameterCount() > kMaxParameters)
+      reader.fail("the network needs more than " + std::to_string(kMaxParameters) + " parameters up to this layer");
   }
   return network;
 }
 
 int DarknetWeightsHeader::bytes() const {
   // Darknet writes `seen` as size_t from version 0.2 on.
-  const bool wide_seen = (major * 10 + minor) >= 2 && major < 1000 && minor < 1000;
+  // Darknet's own test, in 64 bits: a corrupt header's version must not overflow.
+  const bool wide_seen = (std::int64_t{major} * 10 + minor) >= 2 && major < 1000 && minor < 1000;
   return 3 * 4 + (wide_seen ? 8 : 4);
 }
 
 DarknetWeightsHeader readDarknetWeightsHeader(const std::string& weights_path) {
   std::ifstream in(weights_path, std::ios::binary);
   if (!in) throw InputError(weights_path, 0, "cannot open Darknet weights file");
+  return readDarknetWeightsHeader(in, weights_path);
+}
+
+DarknetWeightsHeader readDarknetWeightsHeader(std::istream& in, const std::string& weights_path) {
   DarknetWeightsHeader header;
   std::int32_t version[3];
   if (!in.read(reinterpret_cast<char*>(version), sizeof(version)))
@@ -219,10 +243,15 @@ void checkWeightsFile(const std::string& cfg_path, const std::string& weights_pa
   std::error_code error;
   const auto actual = static_cast<std::int64_t>(std::filesystem::file_size(weights_path, error));
   if (error) throw InputError(weights_path, 0, "cannot read the size of the weights file: " + error.message());
+  checkWeightsSize(network, header, actual, weights_path);
+}
+
+void checkWeightsSize(const DarknetNetwork& network, const DarknetWeightsHeader& header, std::int64_t actual,
+                      const std::string& weights_path) {
   const std::int64_t expected = expectedWeightsBytes(network, header);
   if (actual != expected)
     throw InputError(weights_path, 0,
-                     "weights file has " + std::to_string(actual) + " bytes but " + cfg_path + " needs " +
+                     "weights file has " + std::to_string(actual) + " bytes but " + network.cfg_path + " needs " +
                          std::to_string(expected) + " bytes (" + std::to_string(header.bytes()) + "-byte header + " +
                          std::to_string(network.parameterCount()) + " float32 parameters); " +
                          (actual < expected ? "the file is truncated (an interrupted download?)"

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -187,8 +188,10 @@ int findProperty(const Element& element, std::initializer_list<const char*> name
   return -1;
 }
 
+// NaN counts as 0: std::clamp would pass it through to an undefined cast.
 unsigned char colourByte(double value, ScalarType type) {
   const double scaled = isFloating(type) ? value * 255.0 : value;
+  if (std::isnan(scaled)) return 0;
   return static_cast<unsigned char>(std::clamp(std::round(scaled), 0.0, 255.0));
 }
 
@@ -222,6 +225,10 @@ void writeMapPly(const std::string& path, const std::vector<PlyPoint>& points) {
 std::vector<PlyPoint> readMapPly(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, 0, "cannot open the PLY file");
+  return readMapPly(in, path);
+}
+
+std::vector<PlyPoint> readMapPly(std::istream& in, const std::string& path) {
   const Header header = readHeader(in, path);
   ValueReader reader(in, header.format, path);
 
@@ -238,8 +245,12 @@ std::vector<PlyPoint> readMapPly(const std::string& path) {
     if (is_vertex && (x < 0 || y < 0 || z < 0))
       throw InputError(path, 0, "the vertex element has no x, y and z properties");
 
+    // An element without properties has no bytes to read, whatever its count
+    // (a count of 9e18 took forever; found by the ply fuzz target).
+    if (element.properties.empty()) continue;
     std::vector<double> values(element.properties.size(), 0.0);
-    if (is_vertex) points.reserve(static_cast<size_t>(element.count));
+    // The header's count is not trusted with memory: the data may be shorter.
+    if (is_vertex) points.reserve(static_cast<size_t>(std::min<long>(element.count, 1 << 20)));
     for (long index = 0; index < element.count; ++index) {
       const std::string where = element.name + " " + std::to_string(index) + " of " + std::to_string(element.count);
       for (size_t p = 0; p < element.properties.size(); ++p) {
@@ -248,17 +259,29 @@ std::vector<PlyPoint> readMapPly(const std::string& path) {
           values[p] = reader.read(property.type, where);
           continue;
         }
+        // A count read as an ASCII number or declared float (3e29, -1, 2.5)
+        // must not reach the cast to long (found by the ply fuzz target).
         const double items = reader.read(property.count_type, where);
+        if (!(items >= 0 && items == std::trunc(items) && items <= std::numeric_limits<std::uint32_t>::max()))
+          throw InputError(path, 0, where + ": list " + property.name + " has a count of " + std::to_string(items) +
+                                        ", not an integer in 0..4294967295");
         for (long item = 0; item < static_cast<long>(items); ++item) reader.read(property.type, where);
       }
       if (!is_vertex) continue;
       PlyPoint point;
       point.position = Vec3(values[x], values[y], values[z]);
+      if (!point.position.allFinite()) throw InputError(path, 0, where + ": x, y or z is not a finite number");
       if (red >= 0 && green >= 0 && blue >= 0)
         point.bgr = cv::Vec3b(colourByte(values[blue], element.properties[blue].type),
                               colourByte(values[green], element.properties[green].type),
                               colourByte(values[red], element.properties[red].type));
-      if (class_id >= 0) point.class_id = static_cast<int>(values[class_id]);
+      if (class_id >= 0) {
+        const double id = values[class_id];
+        // A float class_id of 1e30 does not fit an int (found by the ply fuzz target).
+        if (!(id == std::trunc(id) && id >= std::numeric_limits<int>::min() && id <= std::numeric_limits<int>::max()))
+          throw InputError(path, 0, where + ": class_id " + std::to_string(id) + " is not an int");
+        point.class_id = static_cast<int>(id);
+      }
       points.push_back(point);
     }
     found_vertices = found_vertices || is_vertex;

@@ -14,6 +14,7 @@
 
 #include "vslam/io/image_files.hpp"
 #include "vslam/io/sequence_catalog.hpp"
+#include "vslam/io/sequence_files.hpp"
 #include "vslam/io/text_table.hpp"
 #include "vslam/io/timestamp_association.hpp"
 #include "vslam/io/trajectory_io.hpp"
@@ -30,38 +31,9 @@ bool startsWith(const std::string& text, const std::string& prefix) { return tex
 
 std::string absoluteFolder(const fs::path& path) { return fs::weakly_canonical(fs::absolute(path)).string(); }
 
-std::string timestampText(double t) {
-  char text[64];
-  std::snprintf(text, sizeof(text), "%.6f", t);
-  return text;
-}
-
-// One line of rgb.txt / depth.txt: "timestamp relative/path".
-struct ListedImage {
-  double timestamp = 0.0;
-  std::string path;
-  int line = 0;
-};
-
 std::vector<ListedImage> readImageList(const fs::path& list_path, const fs::path& root) {
   const std::string file = list_path.string();
-  std::vector<ListedImage> images;
-  for (const TextRow& row : readTextRows(file)) {
-    if (row.fields.size() != 2)
-      throw InputError(file, row.line,
-                       "expected 'timestamp path', found " + std::to_string(row.fields.size()) + " fields");
-    ListedImage image;
-    image.timestamp = parseNumber(row.fields[0], file, row.line, "timestamp");
-    image.path = (root / row.fields[1]).lexically_normal().string();
-    image.line = row.line;
-    if (!images.empty() && image.timestamp <= images.back().timestamp)
-      throw InputError(file, row.line,
-                       "timestamp " + timestampText(image.timestamp) + " goes backwards (previous line has " +
-                           timestampText(images.back().timestamp) + ")");
-    images.push_back(image);
-  }
-  if (images.empty()) throw InputError(file, 0, "lists no images");
-  return images;
+  return parseTumImageList(readTextRows(file), file, root.string());
 }
 
 void readTumFolder(Sequence& sequence) {
@@ -104,32 +76,7 @@ void readTumFolder(Sequence& sequence) {
 void readKittiCalibration(const fs::path& calib_path, PinholeCamera& camera) {
   const std::string file = calib_path.string();
   if (!fs::exists(calib_path)) throw InputError(file, 0, "missing (a KITTI sequence folder needs calib.txt with P0)");
-  auto projection = [&](const TextRow& row) {
-    if (row.fields.size() != 13)
-      throw InputError(file, row.line,
-                       "expected '" + row.fields[0] + "' and 12 numbers, found " +
-                           std::to_string(row.fields.size() - 1) + " numbers");
-    std::vector<double> p;
-    for (int k = 1; k < 13; ++k) p.push_back(parseNumber(row.fields[k], file, row.line, row.fields[0] + " entry"));
-    return p;
-  };
-  bool found_p0 = false;
-  for (const TextRow& row : readTextRows(file)) {
-    if (row.fields[0] == "P0:") {
-      const std::vector<double> p = projection(row);
-      if (p[0] <= 0 || p[5] <= 0) throw InputError(file, row.line, "P0 has a non-positive focal length");
-      camera.fx = p[0];
-      camera.cx = p[2];
-      camera.fy = p[5];
-      camera.cy = p[6];
-      found_p0 = true;
-    } else if (row.fields[0] == "P1:") {
-      // P1 = K [I | -b e_x]: its fourth entry is -fx * baseline, i.e. -bf.
-      const std::vector<double> p = projection(row);
-      if (p[0] > 0) camera.bf = -p[3];
-    }
-  }
-  if (!found_p0) throw InputError(file, 0, "no 'P0:' line (the left camera's 3x4 projection matrix)");
+  parseKittiCalibration(readTextRows(file), file, camera);
 }
 
 void readKittiFolder(Sequence& sequence, const fs::path& poses_path) {
@@ -137,19 +84,7 @@ void readKittiFolder(Sequence& sequence, const fs::path& poses_path) {
   const fs::path times_path = root / "times.txt";
   const std::string times_file = times_path.string();
   if (!fs::exists(times_path)) throw InputError(times_file, 0, "missing (a KITTI sequence folder needs times.txt)");
-  std::vector<double> times;
-  for (const TextRow& row : readTextRows(times_file)) {
-    if (row.fields.size() != 1)
-      throw InputError(times_file, row.line,
-                       "expected one timestamp, found " + std::to_string(row.fields.size()) + " fields");
-    const double t = parseNumber(row.fields[0], times_file, row.line, "timestamp");
-    if (!times.empty() && t <= times.back())
-      throw InputError(
-          times_file, row.line,
-          "timestamp " + timestampText(t) + " goes backwards (previous line has " + timestampText(times.back()) + ")");
-    times.push_back(t);
-  }
-  if (times.empty()) throw InputError(times_file, 0, "lists no timestamps");
+  const std::vector<double> times = parseKittiTimes(readTextRows(times_file), times_file);
 
   const fs::path image_dir = root / "image_0";
   if (!fs::is_directory(image_dir))

@@ -13,18 +13,23 @@ namespace vslam {
 std::vector<TextRow> readTextRows(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path, 0, "cannot open file");
+  return readTextRows(in, path);
+}
+
+std::vector<TextRow> readTextRows(std::istream& in, const std::string& path) {
   std::vector<TextRow> rows;
   std::string text;
   int line_number = 0;
   while (std::getline(in, text)) {
     ++line_number;
-    const size_t first = text.find_first_not_of(" \t\r");
-    if (first == std::string::npos || text[first] == '#') continue;
     TextRow row;
     row.line = line_number;
     std::istringstream fields(text);
     std::string field;
     while (fields >> field) row.fields.push_back(field);
+    // Blank means no field at all: a line of only form feeds or vertical tabs
+    // (any std::isspace) is blank too, so every row has a first field.
+    if (row.fields.empty() || row.fields[0][0] == '#') continue;
     rows.push_back(std::move(row));
   }
   if (in.bad()) throw InputError(path, line_number + 1, "read error");

@@ -37,11 +37,9 @@ void finishWriting(FilePtr& file, const std::string& path) {
   if (std::fclose(file.release()) != 0 || failed) throw InputError(path, 0, "write error");
 }
 
-}  // namespace
-
-std::vector<StampedPose> readTumTrajectory(const std::string& path) {
+std::vector<StampedPose> tumTrajectoryFromRows(const std::vector<TextRow>& rows, const std::string& path) {
   std::vector<StampedPose> poses;
-  for (const TextRow& row : readTextRows(path)) {
+  for (const TextRow& row : rows) {
     if (row.fields.size() != 8) {
       std::string what =
           "expected 8 fields 'timestamp tx ty tz qx qy qz qw', found " + std::to_string(row.fields.size());
@@ -63,20 +61,8 @@ std::vector<StampedPose> readTumTrajectory(const std::string& path) {
   return poses;
 }
 
-void writeTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses) {
-  FilePtr file = openForWriting(path);
-  std::fprintf(file.get(), "# timestamp tx ty tz qx qy qz qw\n");
-  for (const StampedPose& pose : poses) {
-    const Quat q = pose.T_wc.quaternion().normalized();
-    const Vec3& t = pose.T_wc.t;
-    std::fprintf(file.get(), "%.6f %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", pose.timestamp, t.x(), t.y(), t.z(), q.x(),
-                 q.y(), q.z(), q.w());
-  }
-  finishWriting(file, path);
-}
-
-std::vector<StampedPose> readKittiTrajectory(const std::string& path, const std::vector<double>& timestamps) {
-  const std::vector<TextRow> rows = readTextRows(path);
+std::vector<StampedPose> kittiTrajectoryFromRows(const std::vector<TextRow>& rows, const std::string& path,
+                                                 const std::vector<double>& timestamps) {
   if (!timestamps.empty() && timestamps.size() != rows.size())
     throw InputError(path, 0,
                      "has " + std::to_string(rows.size()) + " poses but there are " +
@@ -104,6 +90,37 @@ std::vector<StampedPose> readKittiTrajectory(const std::string& path, const std:
     poses.push_back(pose);
   }
   return poses;
+}
+
+}  // namespace
+
+std::vector<StampedPose> readTumTrajectory(const std::string& path) {
+  return tumTrajectoryFromRows(readTextRows(path), path);
+}
+
+std::vector<StampedPose> readTumTrajectory(std::istream& in, const std::string& name) {
+  return tumTrajectoryFromRows(readTextRows(in, name), name);
+}
+
+std::vector<StampedPose> readKittiTrajectory(const std::string& path, const std::vector<double>& timestamps) {
+  return kittiTrajectoryFromRows(readTextRows(path), path, timestamps);
+}
+
+std::vector<StampedPose> readKittiTrajectory(std::istream& in, const std::string& name,
+                                             const std::vector<double>& timestamps) {
+  return kittiTrajectoryFromRows(readTextRows(in, name), name, timestamps);
+}
+
+void writeTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses) {
+  FilePtr file = openForWriting(path);
+  std::fprintf(file.get(), "# timestamp tx ty tz qx qy qz qw\n");
+  for (const StampedPose& pose : poses) {
+    const Quat q = pose.T_wc.quaternion().normalized();
+    const Vec3& t = pose.T_wc.t;
+    std::fprintf(file.get(), "%.6f %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", pose.timestamp, t.x(), t.y(), t.z(), q.x(),
+                 q.y(), q.z(), q.w());
+  }
+  finishWriting(file, path);
 }
 
 void writeKittiTrajectory(const std::string& path, const std::vector<StampedPose>& poses) {

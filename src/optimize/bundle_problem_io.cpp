@@ -29,9 +29,7 @@ constexpr int kOldestVersion = 1;
 // Reads the file line by line, skipping comments, and reports errors with the line number.
 class LineReader {
  public:
-  explicit LineReader(const std::string& path) : path_(path), in_(path) {
-    if (!in_) throw InputError(path_, 0, "cannot open bundle problem file");
-  }
+  LineReader(std::istream& in, const std::string& path) : path_(path), in_(in) {}
 
   std::istringstream next(const char* what) {
     std::string line;
@@ -62,7 +60,7 @@ class LineReader {
 
  private:
   std::string path_;
-  std::ifstream in_;
+  std::istream& in_;
   int line_number_ = 0;
 };
 
@@ -102,7 +100,13 @@ void saveBundleProblem(const std::string& path, const PinholeCamera& camera, dou
 }
 
 RecordedBundleProblem loadBundleProblem(const std::string& path) {
-  LineReader reader(path);
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "cannot open bundle problem file");
+  return loadBundleProblem(in, path);
+}
+
+RecordedBundleProblem loadBundleProblem(std::istream& in, const std::string& path) {
+  LineReader reader(in, path);
   RecordedBundleProblem recorded;
   int file_version = 0;
   {
@@ -124,25 +128,31 @@ RecordedBundleProblem loadBundleProblem(const std::string& path) {
                  camera.height, recorded.bf);
     if (word != "camera") reader.fail("expected 'camera fx fy cx cy width height bf'");
   }
+  // Counts come from the file: records are appended as they are read, so a
+  // count of 2e8 over a short file is "unexpected end of file", not 30 GB
+  // allocated up front (found by the bundle_problem fuzz target).
   BundleProblem& problem = recorded.problem;
-  problem.keyframes.resize(reader.count("keyframes"));
-  for (BaKeyframe& kf : problem.keyframes) {
+  const size_t keyframe_count = reader.count("keyframes");
+  while (problem.keyframes.size() < keyframe_count) {
+    BaKeyframe& kf = problem.keyframes.emplace_back();
     std::istringstream line = reader.next("keyframe");
     Mat3& R = kf.T_cw.R;
     Vec3& t = kf.T_cw.t;
     reader.parse(line, "keyframe line", kf.id, kf.fixed, kf.fix_translation_norm, R(0, 0), R(0, 1), R(0, 2),
                  R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1), R(2, 2), t.x(), t.y(), t.z());
   }
-  problem.points.resize(reader.count("points"));
-  for (BaPoint& point : problem.points) {
+  const size_t point_count = reader.count("points");
+  while (problem.points.size() < point_count) {
+    BaPoint& point = problem.points.emplace_back();
     std::istringstream line = reader.next("point");
     Vec3& p = point.position_w;
     reader.parse(line, "point line", point.id, point.fixed, p.x(), p.y(), p.z());
   }
-  problem.observations.resize(reader.count("observations"));
+  const size_t observation_count = reader.count("observations");
   const int n_keyframes = static_cast<int>(problem.keyframes.size());
   const int n_points = static_cast<int>(problem.points.size());
-  for (BaObservation& obs : problem.observations) {
+  while (problem.observations.size() < observation_count) {
+    BaObservation& obs = problem.observations.emplace_back();
     std::istringstream line = reader.next("observation");
     std::string right;
     reader.parse(line, "observation line", obs.keyframe, obs.point, obs.pixel.x(), obs.pixel.y(), obs.inv_sigma2,

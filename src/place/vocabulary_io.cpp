@@ -141,11 +141,12 @@ std::string treeProblem(const std::vector<uint32_t>& child_count, int branching,
 
 }  // namespace
 
-Vocabulary Vocabulary::load(const std::string& path) {
-  const std::string bytes = readFile(path);
+Vocabulary Vocabulary::load(const std::string& path) { return parse(readFile(path), path); }
+
+Vocabulary Vocabulary::parse(const std::string& bytes, const std::string& name) {
   if (bytes.size() >= sizeof(kMagic) && std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) == 0)
-    return loadBinary(path, bytes);
-  return loadDbow2Text(path, bytes);
+    return loadBinary(name, bytes);
+  return loadDbow2Text(name, bytes);
 }
 
 Vocabulary Vocabulary::loadBinary(const std::string& path, const std::string& bytes) {

@@ -103,6 +103,10 @@ struct Config {
 // a missing required key, or a value of the wrong type.
 Config loadConfig(const std::string& path);
 
+// The same from the file's text; `source` is the file named in errors and
+// kept in Config::source.
+Config parseConfig(const std::string& text, const std::string& source);
+
 // Checks what RGB-D needs of the camera (bf > 0); throws InputError naming
 // the config file and the key as that file spells it.
 void requireDepthCamera(const Config& config);

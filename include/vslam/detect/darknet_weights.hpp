@@ -6,6 +6,7 @@
 // detects nothing. The expected size follows from the cfg alone (every
 // convolution's parameter count plus the file header), so we check it first.
 #include <cstdint>
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,8 @@ struct DarknetNetwork {
 // cfg file and line for an unreadable file, an unknown section, a bad value
 // or a layer reference that points nowhere.
 DarknetNetwork parseDarknetCfg(const std::string& cfg_path);
+// The same from a stream; `cfg_path` is the file named in errors.
+DarknetNetwork parseDarknetCfg(std::istream& in, const std::string& cfg_path);
 
 // The first bytes of a .weights file: version, then the number of images
 // seen in training (int64 from version 0.2 on, int32 before).
@@ -47,6 +50,7 @@ struct DarknetWeightsHeader {
 
 // Throws InputError naming the file when it cannot be read or is shorter than a header.
 DarknetWeightsHeader readDarknetWeightsHeader(const std::string& weights_path);
+DarknetWeightsHeader readDarknetWeightsHeader(std::istream& in, const std::string& weights_path);
 
 // Header plus 4 bytes per parameter.
 std::int64_t expectedWeightsBytes(const DarknetNetwork& network, const DarknetWeightsHeader& header);
@@ -54,6 +58,9 @@ std::int64_t expectedWeightsBytes(const DarknetNetwork& network, const DarknetWe
 // Throws InputError naming the weights file, its size and the size the cfg
 // implies when they differ (or when the file is missing).
 void checkWeightsFile(const std::string& cfg_path, const std::string& weights_path);
+// The comparison itself, for a weights file of `actual_bytes` bytes.
+void checkWeightsSize(const DarknetNetwork& network, const DarknetWeightsHeader& header, std::int64_t actual_bytes,
+                      const std::string& weights_path);
 
 // Writes a weights file of exactly the expected size for `cfg_path` (version
 // 0.2.5 header, small random parameters from `seed`): lets tests and benchmarks

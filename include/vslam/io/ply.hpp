@@ -9,6 +9,7 @@
 // (CloudCompare, MeshLab, Open3D): extra properties and elements are skipped,
 // float colours in [0, 1] are scaled to 0..255, a missing colour is black and a
 // missing class_id is -1.
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -30,5 +31,7 @@ void writeMapPly(const std::string& path, const std::vector<PlyPoint>& points);
 // Throws InputError naming the file (and the header line or vertex) on a
 // missing file, a malformed header, a vertex without x/y/z, or truncated data.
 std::vector<PlyPoint> readMapPly(const std::string& path);
+// The same from a stream opened in binary mode; `name` is the file named in errors.
+std::vector<PlyPoint> readMapPly(std::istream& in, const std::string& name);
 
 }  // namespace vslam

@@ -5,6 +5,7 @@
 //           line i belongs to frame i.
 // Readers throw InputError "FILE:LINE: what is wrong" on a malformed line,
 // a timestamp that does not increase, or a rotation that is not one.
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,8 @@
 namespace vslam {
 
 std::vector<StampedPose> readTumTrajectory(const std::string& path);
+// From a stream; `name` is the file named in errors.
+std::vector<StampedPose> readTumTrajectory(std::istream& in, const std::string& name);
 
 // Timestamps with 6 decimals ("%.6f", microseconds as the benchmark writes them),
 // every other number with 9 significant digits.
@@ -21,6 +24,8 @@ void writeTumTrajectory(const std::string& path, const std::vector<StampedPose>&
 // `timestamps`: one per line (e.g. times.txt); empty means timestamp = line index.
 // A count that differs from the number of poses is an error.
 std::vector<StampedPose> readKittiTrajectory(const std::string& path, const std::vector<double>& timestamps = {});
+std::vector<StampedPose> readKittiTrajectory(std::istream& in, const std::string& name,
+                                             const std::vector<double>& timestamps = {});
 
 // 12 numbers a line with 9 significant digits; timestamps are not written.
 void writeKittiTrajectory(const std::string& path, const std::vector<StampedPose>& poses);

@@ -13,6 +13,7 @@
 // the baseline between the two).
 #include <atomic>
 #include <cmath>
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -118,5 +119,7 @@ struct RecordedBundleProblem {
 void saveBundleProblem(const std::string& path, const PinholeCamera& camera, double bf,
                        const BundleProblem& problem);
 RecordedBundleProblem loadBundleProblem(const std::string& path);
+// The same from a stream; `name` is the file named in errors.
+RecordedBundleProblem loadBundleProblem(std::istream& in, const std::string& name);
 
 }  // namespace vslam

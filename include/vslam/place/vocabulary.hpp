@@ -102,6 +102,8 @@ class Vocabulary {
   // node). A missing, truncated or malformed file throws InputError
   // "FILE:LINE: what is wrong" (LINE for text files).
   static Vocabulary load(const std::string& path);
+  // The same from the file's bytes; `name` is the file named in errors.
+  static Vocabulary parse(const std::string& bytes, const std::string& name);
 
   size_t wordCount() const { return node_of_word_.size(); }
   size_t nodeCount() const { return child_count_.size(); }

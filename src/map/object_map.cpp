@@ -101,30 +101,30 @@ std::vector<bool> inliersOf(const std::vector<LabelledPoint>& points, const std:
   }
   const double min_deviation = params.min_deviation_ratio * link_distance;
   std::vector<bool> inlier(group.size(), true);
-  // Marks as outliers the members whose `value` lies too far above (or, when
-  // two-sided, below) the median of all values.
-  auto reject = [&](const std::vector<double>& values, const std::vector<size_t>& at, bool two_sided) {
-    if (values.empty()) return;
-    const auto [centre, deviation] = medianAndDeviation(values);
-    const double limit = params.outlier_sigmas * std::max(deviation, min_deviation);
-    for (size_t k = 0; k < values.size(); ++k) {
-      const double off = two_sided ? std::abs(values[k] - centre) : values[k] - centre;
-      if (off > limit) inlier[at[k]] = false;
-    }
-  };
-  std::vector<double> distances, depths;
-  std::vector<size_t> all, with_ray;
+  // Distance from the median position: the median distance is the object's
+  // radius, robustly; a denser core (keypoints gather on texture) must not
+  // make its plain edges outliers, so the gate is a multiple of that radius.
+  std::vector<double> distances;
+  for (size_t i : group) distances.push_back((points[i].position - median).norm());
+  const double distance_limit =
+      params.outlier_distance_factor * std::max(percentile(distances, 0.5), min_deviation);
+  for (size_t k = 0; k < group.size(); ++k)
+    if (distances[k] > distance_limit) inlier[k] = false;
+  // Depth along each point's own ray, two-sided around the median depth.
+  std::vector<double> depths;
+  std::vector<size_t> with_ray;
   for (size_t k = 0; k < group.size(); ++k) {
     const LabelledPoint& point = points[group[k]];
-    distances.push_back((point.position - median).norm());
-    all.push_back(k);
-    if (point.viewing_direction.squaredNorm() > 0.0) {
-      depths.push_back((point.position - median).dot(point.viewing_direction.normalized()));
-      with_ray.push_back(k);
-    }
+    if (point.viewing_direction.squaredNorm() == 0.0) continue;
+    depths.push_back((point.position - median).dot(point.viewing_direction.normalized()));
+    with_ray.push_back(k);
   }
-  reject(distances, all, false);
-  reject(depths, with_ray, true);
+  if (!depths.empty()) {
+    const auto [centre, deviation] = medianAndDeviation(depths);
+    const double depth_limit = params.outlier_sigmas * std::max(deviation, min_deviation);
+    for (size_t k = 0; k < depths.size(); ++k)
+      if (std::abs(depths[k] - centre) > depth_limit) inlier[with_ray[k]] = false;
+  }
   // At least half the members lie within the median of each measure, so some
   // always remain; this guards only a degenerate input.
   if (std::none_of(inlier.begin(), inlier.end(), [](bool keep) { return keep; })) inlier.assign(group.size(), true);

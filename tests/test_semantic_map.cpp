@@ -168,15 +168,18 @@ TEST(ObjectMap, PointsOffInDepthAlongTheirRaysAreRejected) {
   std::vector<LabelledPoint> points;
   addCluster(points, 2, 0, 60, Vec3(0, 0, 0), Vec3(0.5, 0.3, 0.02), 1, {0});
   addCluster(points, 2, 100, 4, Vec3(0.1, 0.1, 0.32), Vec3(0.4, 0.2, 0.32), 2, {0});
-  for (LabelledPoint& point : points) point.viewing_direction = Vec3(0, 0, 2);  // normalised inside
-  std::vector<ObjectLandmark> objects = buildObjectMap(points, 0.4, ObjectMapParams(), kNames);
+  for (LabelledPoint& point : points) {
+    point.viewing_direction = Vec3(0, 0, 2);  // normalised inside
+    point.detections = {{0, 0}};               // all seen in one box: linked
+  }
+  std::vector<ObjectLandmark> objects = buildObjectMap(points, 0.2, ObjectMapParams(), kNames);
   ASSERT_EQ(objects.size(), 1u);
   EXPECT_EQ(objects[0].point_ids.size(), 60u);
   EXPECT_EQ(objects[0].rejected_point_ids, (std::vector<long>{100, 101, 102, 103}));
   EXPECT_LE(objects[0].box_max.z(), 0.02);
   // Seen from the side (rays along +x) the same points agree in depth: kept.
   for (LabelledPoint& point : points) point.viewing_direction = Vec3(1, 0, 0);
-  objects = buildObjectMap(points, 0.4, ObjectMapParams(), kNames);
+  objects = buildObjectMap(points, 0.2, ObjectMapParams(), kNames);
   ASSERT_EQ(objects.size(), 1u);
   EXPECT_EQ(objects[0].point_ids.size(), 64u);
   EXPECT_TRUE(objects[0].rejected_point_ids.empty());

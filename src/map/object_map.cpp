@@ -78,14 +78,16 @@ std::vector<std::vector<size_t>> linkGroups(const std::vector<LabelledPoint>& po
   return groups;
 }
 
-// Median of `values`, and the robust standard deviation around it (1.4826 x
-// the median absolute deviation: the standard deviation for normal data).
-std::pair<double, double> medianAndDeviation(const std::vector<double>& values) {
-  const double median = percentile(values, 0.5);
-  std::vector<double> deviations;
-  deviations.reserve(values.size());
-  for (double value : values) deviations.push_back(std::abs(value - median));
-  return {median, 1.4826 * percentile(std::move(deviations), 0.5)};
+// Tukey's fences "far out": values below the first quartile or above the
+// third by more than `factor` x the interquartile range (at least `min_range`).
+// Fences from the quartiles rather than the median tolerate a skewed spread:
+// keypoints gather on texture, and a dense core must not make an object's
+// plainer end an outlier (fr1_xyz's keyboard lost its right end to a
+// median-absolute-deviation gate).
+std::pair<double, double> farOutFences(const std::vector<double>& values, double factor, double min_range) {
+  const double q1 = percentile(values, 0.25), q3 = percentile(values, 0.75);
+  const double margin = factor * std::max(q3 - q1, min_range);
+  return {q1 - margin, q3 + margin};
 }
 
 // Which points of `group` agree with the rest: near the group's median
@@ -99,18 +101,15 @@ std::vector<bool> inliersOf(const std::vector<LabelledPoint>& points, const std:
     for (size_t i : group) axis.push_back(points[i].position[a]);
     median[a] = percentile(std::move(axis), 0.5);
   }
-  const double min_deviation = params.min_deviation_ratio * link_distance;
+  const double min_range = params.min_spread_ratio * link_distance;
   std::vector<bool> inlier(group.size(), true);
-  // Distance from the median position: the median distance is the object's
-  // radius, robustly; a denser core (keypoints gather on texture) must not
-  // make its plain edges outliers, so the gate is a multiple of that radius.
+  // Distance from the median position: only too far is an outlier.
   std::vector<double> distances;
   for (size_t i : group) distances.push_back((points[i].position - median).norm());
-  const double distance_limit =
-      params.outlier_distance_factor * std::max(percentile(distances, 0.5), min_deviation);
+  const double distance_limit = farOutFences(distances, params.outlier_iqr_factor, min_range).second;
   for (size_t k = 0; k < group.size(); ++k)
     if (distances[k] > distance_limit) inlier[k] = false;
-  // Depth along each point's own ray, two-sided around the median depth.
+  // Depth along each point's own ray from the median: in front or behind.
   std::vector<double> depths;
   std::vector<size_t> with_ray;
   for (size_t k = 0; k < group.size(); ++k) {
@@ -120,12 +119,11 @@ std::vector<bool> inliersOf(const std::vector<LabelledPoint>& points, const std:
     with_ray.push_back(k);
   }
   if (!depths.empty()) {
-    const auto [centre, deviation] = medianAndDeviation(depths);
-    const double depth_limit = params.outlier_sigmas * std::max(deviation, min_deviation);
+    const auto [low, high] = farOutFences(depths, params.outlier_iqr_factor, min_range);
     for (size_t k = 0; k < depths.size(); ++k)
-      if (std::abs(depths[k] - centre) > depth_limit) inlier[with_ray[k]] = false;
+      if (depths[k] < low || depths[k] > high) inlier[with_ray[k]] = false;
   }
-  // At least half the members lie within the median of each measure, so some
+  // Half the members lie between the quartiles of each measure, so some
   // always remain; this guards only a degenerate input.
   if (std::none_of(inlier.begin(), inlier.end(), [](bool keep) { return keep; })) inlier.assign(group.size(), true);
   return inlier;

@@ -12,13 +12,11 @@
 // relative to the scene (see linkDistanceFor).
 //
 // An object's extent comes only from the points that agree with it: a point
-// farther from the object's median position than k times the median such
-// distance, or whose depth along its own
-// viewing ray disagrees with the object's likewise (background seen through
-// the detection box), is rejected; the box spans the inner percentiles of the
-// rest. Then objects of confusable classes (a monitor the detector sometimes
-// calls a laptop) whose boxes overlap become one object of the class with more
-// points.
+// far out of the others' distances from the object's median position, or of
+// their depths along the viewing rays (background seen through the detection
+// box), is rejected; the box spans the inner percentiles of the rest. Then
+// objects of confusable classes (a monitor the detector sometimes calls a
+// laptop) whose boxes overlap become one object of the class with more points.
 #include <utility>
 #include <string>
 #include <vector>
@@ -58,15 +56,14 @@ struct ObjectMapParams {
   double box_link_factor = 5.0;       // points sharing a detection box link up to this x the link distance
   int min_points = 5;                 // smaller groups are dropped as noise (stray labels)
   double box_percentile = 0.05;       // box spans [p, 1 - p] of the points per axis
-  // Outliers: farther from the object's median position than this x the
-  // median such distance (its robust radius), ...
-  double outlier_distance_factor = 3.0;
-  // ... or off the median depth along their own viewing rays by more than
-  // this many robust standard deviations (1.4826 x the median absolute deviation).
-  double outlier_sigmas = 3.0;
-  // Floor of both the radius and the deviation, x the link distance: points on
-  // a flat face agree in depth to within noise, which must not reject half of them.
-  double min_deviation_ratio = 0.25;
+  // Outliers (Tukey's "far out" fences): a distance from the object's median
+  // position above the distances' third quartile, or a depth along the point's
+  // own viewing ray (from the median) outside the depths' quartiles, by more
+  // than this x the interquartile range.
+  double outlier_iqr_factor = 3.0;
+  // Floor of the interquartile range, x the link distance: points on a flat
+  // face agree in depth to within noise, which must not reject a fair share of them.
+  double min_spread_ratio = 0.25;
   // Classes the detector confuses on one object (names of the model's names
   // file; both spellings of COCO's renamed classes). Kept small: see
   // docs/SEMANTIC_MAP.md for why each group is here.

@@ -159,6 +159,17 @@ TEST(ObjectMap, StrayPointsDoNotStretchTheBox) {
   ASSERT_EQ(without_rays.size(), 1u);
   EXPECT_EQ(without_rays[0].rejected_point_ids, (std::vector<long>{100, 101, 102}));
   EXPECT_LE(without_rays[0].box_max.z(), 0.5);
+
+  // Four points and a stray linked to them: fewer than min_points (5) agree,
+  // so no object.
+  std::vector<LabelledPoint> few;
+  addCluster(few, 1, 0, 4, Vec3(0, 0, 0), Vec3(0.01, 0.01, 0.01), 3, {0});
+  addCluster(few, 1, 10, 1, Vec3(0, 0, 2), Vec3(0, 0, 2), 4, {0});
+  for (LabelledPoint& point : few) point.detections = {{0, 0}};
+  ASSERT_EQ(ObjectMapParams().min_points, 5);
+  EXPECT_TRUE(buildObjectMap(few, 0.5, ObjectMapParams(), kNames).empty());
+  few.back().position.z() = 0.005;  // the fifth agrees: an object
+  EXPECT_EQ(buildObjectMap(few, 0.5, ObjectMapParams(), kNames).size(), 1u);
 }
 
 // A flat monitor face (0.5 x 0.3 m, 2 cm deep) seen along +z, and 4 points of

@@ -214,7 +214,9 @@ std::vector<ObjectLandmark> buildObjectMap(const std::vector<LabelledPoint>& poi
     std::sort(members.begin(), members.end(), [&](size_t a, size_t b) { return points[a].id < points[b].id; });
     for (std::vector<size_t>& group : linkGroups(points, members, link_distance, params.box_link_factor * link_distance))
       if (static_cast<int>(group.size()) >= params.min_points) {
-        objects.push_back(describe(points, group, class_id, link_distance, params, class_names));
+        ObjectLandmark object = describe(points, group, class_id, link_distance, params, class_names);
+        if (static_cast<int>(object.point_ids.size()) < params.min_points) continue;  // too few agree
+        objects.push_back(std::move(object));
         groups.push_back(std::move(group));
       }
   }

@@ -54,7 +54,7 @@ struct ObjectLandmark {
 struct ObjectMapParams {
   double link_distance_ratio = 0.08;  // link distance = this x the median keyframe-to-point depth
   double box_link_factor = 5.0;       // points sharing a detection box link up to this x the link distance
-  int min_points = 5;                 // smaller groups are dropped as noise (stray labels)
+  int min_points = 5;                 // groups with fewer points (outliers excluded) are dropped as stray labels
   double box_percentile = 0.05;       // box spans [p, 1 - p] of the points per axis
   // Outliers (Tukey's "far out" fences): a distance from the object's median
   // position above the distances' third quartile, or a depth along the point's

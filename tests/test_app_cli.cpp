@@ -148,6 +148,8 @@ TEST(CliRun, DetectorWritesObjectsAndReport) {
     EXPECT_GE(object["points"].get<int>(), 5);
     EXPECT_GE(object["keyframes"].size(), 1u);
     EXPECT_GT(object["confidence"].get<double>(), 0.0);
+    EXPECT_GE(object["points_rejected"].get<int>(), 0);
+    EXPECT_TRUE(object["merged_classes"].is_array());
   }
 }
 

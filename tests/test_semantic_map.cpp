@@ -8,6 +8,7 @@
 
 #include "test_support.hpp"
 #include "vslam/detect/detector.hpp"
+#include "vslam/eval/ate.hpp"
 #include "vslam/io/sequence.hpp"
 #include "vslam/map/object_map.hpp"
 #include "vslam/slam/frame_builder.hpp"
@@ -127,6 +128,134 @@ TEST(ObjectMap, ASharedDetectionBoxJoinsDistantParts) {
   EXPECT_EQ(by_class[1].point_ids.size(), 20u);
 }
 
+// A 0.5 m cube of 40 chair points seen along +z, and 3 stray points 2 m
+// behind it seen in the same detection box (so linked into the object): the
+// strays are rejected and the box stays inside the cube. Before outlier
+// rejection its 95th percentile in z lay among the strays (2.25).
+TEST(ObjectMap, StrayPointsDoNotStretchTheBox) {
+  std::vector<LabelledPoint> points;
+  addCluster(points, 1, 0, 40, Vec3(0, 0, 0), Vec3(0.5, 0.5, 0.5), 1, {0, 1});
+  addCluster(points, 1, 100, 3, Vec3(0.24, 0.24, 2.45), Vec3(0.26, 0.26, 2.47), 2, {1});
+  for (LabelledPoint& point : points) {
+    point.detections = {{1, 0}};
+    point.viewing_direction = Vec3(0, 0, 1);
+  }
+  const std::vector<ObjectLandmark> objects = buildObjectMap(points, 0.5, ObjectMapParams(), kNames);
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].point_ids.size(), 40u);
+  EXPECT_EQ(objects[0].point_ids.front(), 0);
+  EXPECT_EQ(objects[0].point_ids.back(), 39);
+  EXPECT_EQ(objects[0].rejected_point_ids, (std::vector<long>{100, 101, 102}));
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_GE(objects[0].box_min[a], 0.0) << a;
+    EXPECT_LE(objects[0].box_min[a], 0.1) << a;
+    EXPECT_LE(objects[0].box_max[a], 0.5) << a;
+    EXPECT_GE(objects[0].box_max[a], 0.4) << a;
+    EXPECT_NEAR(objects[0].centroid[a], 0.25, 0.05) << a;
+  }
+  // Without viewing rays the distance check alone still rejects them.
+  for (LabelledPoint& point : points) point.viewing_direction = Vec3::Zero();
+  const std::vector<ObjectLandmark> without_rays = buildObjectMap(points, 0.5, ObjectMapParams(), kNames);
+  ASSERT_EQ(without_rays.size(), 1u);
+  EXPECT_EQ(without_rays[0].rejected_point_ids, (std::vector<long>{100, 101, 102}));
+  EXPECT_LE(without_rays[0].box_max.z(), 0.5);
+
+  // Four points and a stray linked to them: fewer than min_points (5) agree,
+  // so no object.
+  std::vector<LabelledPoint> few;
+  addCluster(few, 1, 0, 4, Vec3(0, 0, 0), Vec3(0.01, 0.01, 0.01), 3, {0});
+  addCluster(few, 1, 10, 1, Vec3(0, 0, 2), Vec3(0, 0, 2), 4, {0});
+  for (LabelledPoint& point : few) point.detections = {{0, 0}};
+  ASSERT_EQ(ObjectMapParams().min_points, 5);
+  EXPECT_TRUE(buildObjectMap(few, 0.5, ObjectMapParams(), kNames).empty());
+  few.back().position.z() = 0.005;  // the fifth agrees: an object
+  EXPECT_EQ(buildObjectMap(few, 0.5, ObjectMapParams(), kNames).size(), 1u);
+}
+
+// A flat monitor face (0.5 x 0.3 m, 2 cm deep) seen along +z, and 4 points of
+// the wall 30 cm behind it seen through its box: near the monitor's median by
+// distance (the face is wider than that), but off in depth along their rays.
+TEST(ObjectMap, PointsOffInDepthAlongTheirRaysAreRejected) {
+  std::vector<LabelledPoint> points;
+  addCluster(points, 2, 0, 60, Vec3(0, 0, 0), Vec3(0.5, 0.3, 0.02), 1, {0});
+  addCluster(points, 2, 100, 4, Vec3(0.1, 0.1, 0.32), Vec3(0.4, 0.2, 0.32), 2, {0});
+  for (LabelledPoint& point : points) {
+    point.viewing_direction = Vec3(0, 0, 2);  // normalised inside
+    point.detections = {{0, 0}};               // all seen in one box: linked
+  }
+  std::vector<ObjectLandmark> objects = buildObjectMap(points, 0.2, ObjectMapParams(), kNames);
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].point_ids.size(), 60u);
+  EXPECT_EQ(objects[0].rejected_point_ids, (std::vector<long>{100, 101, 102, 103}));
+  EXPECT_LE(objects[0].box_max.z(), 0.02);
+  // Seen from the side (rays along +x) the same points agree in depth: kept.
+  for (LabelledPoint& point : points) point.viewing_direction = Vec3(1, 0, 0);
+  objects = buildObjectMap(points, 0.2, ObjectMapParams(), kNames);
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].point_ids.size(), 64u);
+  EXPECT_TRUE(objects[0].rejected_point_ids.empty());
+}
+
+const std::vector<std::string> kScreenNames = {"person", "chair", "tvmonitor", "laptop"};
+
+// A tvmonitor group and a laptop group overlapping in 3D become one object of
+// the class with more points, recording the other; apart, or with no
+// confusable classes configured, they stay two; a person never merges.
+TEST(ObjectMap, OverlappingConfusableClassesMerge) {
+  std::vector<LabelledPoint> points;
+  addCluster(points, 2, 0, 80, Vec3(0, 0, 0), Vec3(0.5, 0.3, 0.05), 1, {0, 1});
+  addCluster(points, 3, 100, 20, Vec3(0.1, 0.05, 0.0), Vec3(0.3, 0.25, 0.05), 2, {1, 2});
+  addCluster(points, 0, 200, 30, Vec3(0.1, 0.05, 0.0), Vec3(0.3, 0.25, 0.05), 3, {3});
+  ObjectMapParams params;
+  std::vector<ObjectLandmark> objects = buildObjectMap(points, 0.15, params, kScreenNames);
+  ASSERT_EQ(objects.size(), 2u);
+  EXPECT_EQ(objects[0].class_name, "person");
+  EXPECT_EQ(objects[0].point_ids.size(), 30u);
+  EXPECT_TRUE(objects[0].merged_classes.empty());
+  EXPECT_EQ(objects[1].class_name, "tvmonitor");
+  EXPECT_EQ(objects[1].class_id, 2);
+  EXPECT_EQ(objects[1].point_ids.size(), 100u);
+  EXPECT_EQ(objects[1].merged_classes, (std::vector<std::string>{"laptop"}));
+  EXPECT_EQ(objects[1].keyframe_ids, (std::vector<long>{0, 1, 2}));
+
+  // More laptop points than monitor points: the merged object is a laptop.
+  addCluster(points, 3, 300, 90, Vec3(0, 0, 0), Vec3(0.5, 0.3, 0.05), 4, {5});
+  objects = buildObjectMap(points, 0.15, params, kScreenNames);
+  ASSERT_EQ(objects.size(), 2u);
+  EXPECT_EQ(objects[1].class_name, "laptop");
+  EXPECT_EQ(objects[1].point_ids.size(), 190u);
+  EXPECT_EQ(objects[1].merged_classes, (std::vector<std::string>{"tvmonitor"}));
+  points.resize(130);
+
+  params.confusable_classes.clear();
+  EXPECT_EQ(buildObjectMap(points, 0.15, params, kScreenNames).size(), 3u);
+  params = ObjectMapParams();
+
+  // The laptop 2 m to the side: two objects.
+  for (LabelledPoint& point : points)
+    if (point.class_id == 3) point.position.x() += 2.0;
+  objects = buildObjectMap(points, 0.15, params, kScreenNames);
+  ASSERT_EQ(objects.size(), 3u);
+  EXPECT_EQ(objects[1].class_name, "tvmonitor");
+  EXPECT_EQ(objects[1].point_ids.size(), 80u);
+  EXPECT_EQ(objects[2].class_name, "laptop");
+  EXPECT_EQ(objects[2].point_ids.size(), 20u);
+  for (const ObjectLandmark& object : objects) EXPECT_TRUE(object.merged_classes.empty());
+}
+
+TEST(ObjectMap, BoxesOverlap) {
+  const Vec3 zero(0, 0, 0), one(1, 1, 1);
+  EXPECT_TRUE(boxesOverlap(zero, one, Vec3(0.5, 0, 0), Vec3(1.5, 1, 1), 0.0, 0.5));
+  EXPECT_FALSE(boxesOverlap(zero, one, Vec3(0.5, 0, 0), Vec3(1.5, 1, 1), 0.0, 0.51));
+  EXPECT_FALSE(boxesOverlap(zero, one, Vec3(2, 0, 0), Vec3(3, 1, 1), 0.0, 0.01));
+  // A flat box has no volume; the margin gives it one.
+  const Vec3 flat(1, 1, 0);
+  EXPECT_FALSE(boxesOverlap(zero, flat, zero, flat, 0.0, 0.3));
+  EXPECT_TRUE(boxesOverlap(zero, flat, zero, flat, 0.1, 0.3));
+  // A small box inside a large one shares all of the smaller.
+  EXPECT_TRUE(boxesOverlap(zero, Vec3(10, 10, 10), Vec3(4, 4, 4), Vec3(5, 5, 5), 0.0, 1.0));
+}
+
 TEST(ObjectMap, Percentile) {
   EXPECT_DOUBLE_EQ(percentile({3, 1, 2}, 0.5), 2.0);
   EXPECT_DOUBLE_EQ(percentile({0, 10}, 0.25), 2.5);
@@ -189,7 +318,15 @@ struct SemanticRun {
   std::vector<ExportedMapPoint> points;
   std::vector<ObjectLandmark> objects;
   DetectionSummary detection;
+  std::vector<ObjectLandmark> plain_objects;  // no outlier rejection, no merging (as before issue 15)
 };
+
+ObjectMapParams plainObjectParams() {
+  ObjectMapParams params;
+  params.outlier_iqr_factor = 1e9;
+  params.confusable_classes.clear();
+  return params;
+}
 
 // Deterministic run over the first `count` frames, submitting each next frame
 // to detection ahead as `vslam run` does.
@@ -210,7 +347,8 @@ SemanticRun runFirstFrames(const Sequence& sequence, const DetectorParams& detec
     image = next;
   }
   system.finish();
-  return {system.frameTrajectory(), system.mapPoints(), system.objectMap(), system.detectionSummary()};
+  return {system.frameTrajectory(), system.mapPoints(), system.objectMap(), system.detectionSummary(),
+          system.objectMap(plainObjectParams())};
 }
 
 int countClass(const std::vector<ExportedMapPoint>& points, int class_id) {
@@ -250,6 +388,50 @@ TEST(SemanticSlam, DetectorAddsKeypointsAndLabelsTheMap) {
     EXPECT_GT(object.confidence, 0.5);
     EXPECT_LE(object.confidence, 1.0);
   }
+}
+
+// The first 400 frames of fr1_xyz, deterministic (about 25 s on 2 cores: the
+// detector called the monitor a laptop in enough keyframes only from frame
+// 300 or so). Without outlier rejection and merging (as before), the monitor
+// appears twice (tvmonitor, laptop) and its box is 1.23 m wide; now it is one
+// tvmonitor, with the laptop merged in, under 1.2 m in every axis. Sizes are
+// metric through the Sim(3) scale of the trajectory against the ground truth.
+TEST(SemanticSlam, ObjectsOfFr1XyzLookLikeTheObjects) {
+  const Sequence sequence = fr1Xyz();
+  const SemanticRun run = runFirstFrames(sequence, sequence.config.detector, 400);
+  AteOptions ate;
+  ate.alignment = Alignment::Sim3;
+  const double scale = computeAte(run.frames, sequence.groundtruth, ate).scale;
+  ASSERT_GT(scale, 0.5);
+
+  int screens = 0;
+  for (const ObjectLandmark& object : run.objects) {
+    if (object.class_name == "tvmonitor" || object.class_name == "laptop") {
+      ++screens;
+      EXPECT_EQ(object.class_name, "tvmonitor");
+      EXPECT_EQ(object.merged_classes, (std::vector<std::string>{"laptop"}));
+    }
+    // Desk-scale classes. The chair is left out: it stands 2.6 m from the
+    // camera, where monocular depth scatters its points over more than a
+    // metre without any of them being a stray (docs/SEMANTIC_MAP.md).
+    if (object.class_name == "tvmonitor" || object.class_name == "keyboard" || object.class_name == "book")
+      for (int a = 0; a < 3; ++a)
+        EXPECT_LE(scale * (object.box_max[a] - object.box_min[a]), 1.2) << object.class_name << " axis " << a;
+    EXPECT_LE(object.rejected_point_ids.size(), object.point_ids.size() / 5) << object.class_name;
+  }
+  EXPECT_EQ(screens, 1);
+
+  // The same map without rejection and merging: what the test guards against.
+  int plain_screens = 0;
+  double plain_monitor_width = 0.0;
+  for (const ObjectLandmark& object : run.plain_objects) {
+    if (object.class_name == "laptop") ++plain_screens;
+    if (object.class_name != "tvmonitor") continue;
+    ++plain_screens;
+    plain_monitor_width = std::max(plain_monitor_width, scale * (object.box_max.x() - object.box_min.x()));
+  }
+  EXPECT_EQ(plain_screens, 2);
+  EXPECT_GT(plain_monitor_width, 1.2);
 }
 
 TEST(SemanticSlam, DynamicClassRemovesItsKeypoints) {

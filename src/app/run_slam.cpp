@@ -269,7 +269,9 @@ void writeObjectsJson(const std::string& path, const std::vector<ObjectLandmark>
                     {"box_min", vec3(object.box_min)},
                     {"box_max", vec3(object.box_max)},
                     {"points", static_cast<int>(object.point_ids.size())},
-                    {"keyframes", object.keyframe_ids}});
+                    {"keyframes", object.keyframe_ids},
+                    {"points_rejected", static_cast<int>(object.rejected_point_ids.size())},
+                    {"merged_classes", object.merged_classes}});
   writeTextFile(path, list.dump(2) + "\n");
 }
 

@@ -247,13 +247,16 @@ std::vector<ObjectLandmark> System::objectMap(const ObjectMapParams& params) con
       LabelledPoint entry{point->id(), point->position(), point->classId(), point->classConfidence(), {}, {}};
       for (const auto& [keyframe, keypoint] : point->observations()) {
         if (keyframe->isBad()) continue;
-        depths.push_back((point->position() - keyframe->cameraCentre()).norm());
+        const Vec3 ray = point->position() - keyframe->cameraCentre();
+        depths.push_back(ray.norm());
+        if (ray.norm() > 0.0) entry.viewing_direction += ray.normalized();
         entry.keyframe_ids.push_back(keyframe->id());
         if (entry.class_id < 0 || static_cast<size_t>(keypoint) >= keyframe->labels.size()) continue;
         const FeatureLabel& label = keyframe->labels[keypoint];
         if (label.class_id == entry.class_id && label.detection_id >= 0)
           entry.detections.emplace_back(keyframe->id(), label.detection_id);
       }
+      if (entry.viewing_direction.norm() > 0.0) entry.viewing_direction.normalize();
       if (entry.class_id >= 0) labelled.push_back(std::move(entry));
     }
   }

@@ -5,6 +5,7 @@
 // deterministic"), with a margin for run-to-run spread.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <stdexcept>
 
@@ -129,6 +130,8 @@ TEST(SlamThreaded, CirclingARoomKeepsItsAccuracy) {
   RoomLoopParams room;
   const std::vector<StampedPose> path = roomLoopPath(room);
   for (const RoomRun& run : runRoomLoopThreaded(room, path, 2)) {
+    // The figure docs/BENCHMARKS.md gathers with --gtest_repeat.
+    std::printf("room loop, threaded: keyframe ATE %.2f cm, %zu loop(s)\n", 100 * run.keyframe_ate, run.loops.size());
     EXPECT_EQ(run.loops.size(), 1u);
     EXPECT_LT(run.keyframe_ate, 0.010) << "keyframe ATE " << run.keyframe_ate;
   }

@@ -311,7 +311,8 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
   const double baseline = camera.baseline();
   // ORB-SLAM2 triangulates with 10 neighbours when depth is measured, 20 when not.
   const size_t neighbours = rgbd ? kTriangulationNeighboursDepth : kTriangulationNeighbours;
-  for (KeyFrame* neighbour : keyframe->bestCovisibles(neighbours)) {
+  const std::vector<KeyFrame*> covisibles = keyframe->bestCovisibles(neighbours);
+  for (KeyFrame* neighbour : covisibles) {
     const Vec3 C2 = neighbour->cameraCentre();
     // Too short a baseline for the scene depth gives unreliable depth; with
     // depth, a motion shorter than the virtual stereo baseline adds nothing.
@@ -377,7 +378,7 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
     }
   }
   spdlog::debug("keyframe {}: {} new map points from {} covisible keyframes", keyframe->id(), created,
-                keyframe->bestCovisibles(neighbours).size());
+                covisibles.size());
 }
 
 void LocalMapping::fuseDuplicates(KeyFrame* keyframe) {

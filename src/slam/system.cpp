@@ -265,5 +265,6 @@ std::vector<ObjectLandmark> System::objectMap(const ObjectMapParams& params) con
 }
 
 int System::lastTrackedPoints() const { return tracking_->lastTrackedPoints(); }
+int System::lastMatchedPoints() const { return tracking_->lastMatchedPoints(); }
 
 }  // namespace vslam

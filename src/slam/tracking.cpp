@@ -152,6 +152,7 @@ bool Tracking::track(Frame& frame) {
   }
 
   last_tracked_points_ = ok ? matches_inliers_ : 0;
+  last_matched_points_ = ok ? local_map_matches_ : 0;
   if (ok && reference_keyframe_) {
     record.tracked = true;
     record.reference = reference_keyframe_;
@@ -558,6 +559,8 @@ bool Tracking::trackLocalMap(Frame& frame) {
     const bool just_relocalised = last_relocalisation_frame_id_ >= 0 && frame.id < last_relocalisation_frame_id_ + 2;
     searchLocalPoints(frame, local_points_, just_relocalised ? 5.0 : 1.0);
   }
+  local_map_matches_ = static_cast<int>(std::count_if(frame.map_points.begin(), frame.map_points.end(),
+                                                      [](const MapPoint* point) { return point != nullptr; }));
   optimisePose(frame);
 
   matches_inliers_ = 0;

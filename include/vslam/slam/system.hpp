@@ -130,6 +130,7 @@ class System {
   // the link distance is relative to the median keyframe-to-point depth.
   std::vector<ObjectLandmark> objectMap(const ObjectMapParams& params = ObjectMapParams()) const;
   int lastTrackedPoints() const;
+  int lastMatchedPoints() const;  // before the pose optimisation's outlier rejection
   StageTimer& timer() { return timer_; }
   // Loop Closing's bookkeeping (empty state without it); waits for the keyframe in hand.
   LoopClosingState loopClosingState() const;

@@ -133,25 +133,32 @@ TEST(OrbExtractor, IsDeterministic) {
   EXPECT_EQ(cv::norm(a.descriptors, b.descriptors, cv::NORM_L1), 0.0);
 }
 
-TEST(OrbExtractor, PatternIsFixedAndInsideThePatch) {
-  const std::vector<BriefPair> pattern = makeBriefPattern();
+TEST(OrbExtractor, PatternIsStandardOrbsAndInsideTheBorder) {
+  const std::vector<BriefPair> pattern = standardOrbPattern();
   ASSERT_EQ(pattern.size(), 256u);
   std::set<std::tuple<int, int, int, int>> distinct;
   for (const BriefPair& t : pattern) {
-    EXPECT_LE(t.x1 * t.x1 + t.y1 * t.y1, 225);
-    EXPECT_LE(t.x2 * t.x2 + t.y2 * t.y2, 225);
+    for (int v : {t.x1, t.y1, t.x2, t.y2}) {
+      EXPECT_GE(v, -13);
+      EXPECT_LE(v, 12);
+    }
+    // Rotated, a test point stays within its radius (+0.5 rounding) of the
+    // keypoint, which must be inside the border.
+    EXPECT_LE(std::hypot(t.x1, t.y1) + 0.5, OrbExtractor::kEdgeBorder);
+    EXPECT_LE(std::hypot(t.x2, t.y2) + 0.5, OrbExtractor::kEdgeBorder);
     EXPECT_FALSE(t.x1 == t.x2 && t.y1 == t.y2);
     distinct.emplace(t.x1, t.y1, t.x2, t.y2);
   }
   EXPECT_EQ(distinct.size(), 256u);
-  // Pinned: changing the generator silently would invalidate stored descriptors.
+  // Pinned: the first, a middle and the last test of ORB's published table
+  // (a changed table would invalidate stored descriptors and vocabularies).
   const auto asTuple = [](const BriefPair& t) { return std::make_tuple(int(t.x1), int(t.y1), int(t.x2), int(t.y2)); };
-  EXPECT_EQ(asTuple(pattern.front()), std::make_tuple(9, -7, 0, 1));
-  EXPECT_EQ(asTuple(pattern.back()), std::make_tuple(3, -7, -8, -2));
-  // Spread like BRIEF's G II: mean |coordinate| of N(0, 6.2^2) is 4.9.
-  double sum_abs = 0;
-  for (const BriefPair& t : pattern) sum_abs += std::abs(t.x1) + std::abs(t.y1) + std::abs(t.x2) + std::abs(t.y2);
-  EXPECT_NEAR(sum_abs / (4 * 256), 4.9, 0.5);
+  EXPECT_EQ(asTuple(pattern[0]), std::make_tuple(8, -3, 9, 5));
+  EXPECT_EQ(asTuple(pattern[128]), std::make_tuple(-12, -9, -6, 4));
+  EXPECT_EQ(asTuple(pattern[255]), std::make_tuple(-1, -6, 0, -11));
+  const OrbExtractor extractor{OrbParams()};
+  ASSERT_EQ(extractor.pattern().size(), 256u);
+  EXPECT_EQ(asTuple(extractor.pattern()[128]), asTuple(pattern[128]));
 }
 
 TEST(OrbExtractor, DescriptorsAndAnglesFollowA90DegreeRotation) {

@@ -1,14 +1,13 @@
 // ORB extraction: per level, FAST in ~30 px cells (fallback threshold where a
 // cell is empty), quadtree distribution to the level's quota, intensity-centroid
-// orientation, rotated BRIEF on the blurred level. See docs/FEATURES.md.
+// orientation, standard ORB descriptors (rotated BRIEF with ORB's learned
+// pattern) on the blurred level. See docs/FEATURES.md.
 #include "vslam/feature/orb_extractor.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <queue>
-#include <random>
-#include <set>
 #include <tuple>
 
 #include <opencv2/features2d.hpp>
@@ -20,7 +19,6 @@ namespace vslam {
 namespace {
 
 constexpr int kFastMargin = 4;  // FAST's circle radius (3) + 1 so non-max suppression sees all neighbours
-constexpr std::uint32_t kBriefSeed = 20240531u;
 
 // A candidate corner in level pixels, with its level-0 position.
 struct Corner {
@@ -209,22 +207,23 @@ float centroidAngle(const cv::Mat& image, const cv::Point& p, const std::vector<
   return static_cast<float>(angle);
 }
 
-// Rounds to nearest (halves up) for |v| < 64; unlike cvRound it vectorises.
-inline int roundSmall(float v) { return static_cast<int>(v + 64.5f) - 64; }
-
-// 256-bit rotated BRIEF. `points_x/y` hold the 512 test points (pair i =
-// points 2i, 2i+1), rotated here by the keypoint angle.
+// Standard ORB's rotated BRIEF, computed as cv::ORB computes it so that the
+// bits are the same: the angle to radians in float, its cosine and sine rounded
+// to float, each test point rotated in float and rounded half to even (cvRound),
+// then I(p1) < I(p2) on the blurred level. `points_x/y` hold the 512 test points
+// (pair i = points 2i, 2i+1).
 void computeDescriptor(const cv::Mat& blurred, const cv::Point& p, float angle_deg, const float* points_x,
                        const float* points_y, uchar* out) {
   const uchar* centre = blurred.ptr<uchar>(p.y) + p.x;
   const int step = static_cast<int>(blurred.step1());
   const float angle = angle_deg * static_cast<float>(CV_PI / 180.0);
-  const float c = std::cos(angle), s = std::sin(angle);
+  const float c = static_cast<float>(std::cos(static_cast<double>(angle)));
+  const float s = static_cast<float>(std::sin(static_cast<double>(angle)));
   int offsets[2 * 256];
   for (int i = 0; i < 2 * 256; ++i) {
     const float x = points_x[i] * c - points_y[i] * s;
     const float y = points_x[i] * s + points_y[i] * c;
-    offsets[i] = roundSmall(y) * step + roundSmall(x);
+    offsets[i] = cvRound(y) * step + cvRound(x);
   }
   for (int byte = 0; byte < kOrbDescriptorBytes; ++byte) {
     const int* o = offsets + 16 * byte;
@@ -236,40 +235,7 @@ void computeDescriptor(const cv::Mat& blurred, const cv::Point& p, float angle_d
 
 }  // namespace
 
-std::vector<BriefPair> makeBriefPattern() {
-  constexpr int kRadius = OrbExtractor::kPatchRadius;
-  std::mt19937 rng(kBriefSeed);
-  // Irwin-Hall: the sum of 12 uniforms on [0, 1) minus 6 has mean 0, variance 1
-  // and is close to normal. Each uniform is k / 2^32 and the sum needs < 53 bits,
-  // so every step is exact in double arithmetic: the same table everywhere.
-  const auto standardNormal = [&rng]() {
-    double sum = 0.0;
-    for (int i = 0; i < 12; ++i) sum += static_cast<double>(static_cast<std::uint32_t>(rng())) * (1.0 / 4294967296.0);
-    return sum - 6.0;
-  };
-  const double sigma = 31.0 / 5.0;  // BRIEF's G II: sigma^2 = S^2 / 25 for patch size S = 31
-  const auto samplePoint = [&]() {
-    while (true) {
-      const int x = static_cast<int>(std::lround(sigma * standardNormal()));
-      const int y = static_cast<int>(std::lround(sigma * standardNormal()));
-      if (x * x + y * y <= kRadius * kRadius) return cv::Point(x, y);
-    }
-  };
-  std::vector<BriefPair> pattern;
-  std::set<std::tuple<int, int, int, int>> seen;  // a pair and its swap are the same test
-  while (pattern.size() < 256) {
-    const cv::Point a = samplePoint(), b = samplePoint();
-    if (a == b) continue;
-    const bool a_first = std::tie(a.x, a.y) < std::tie(b.x, b.y);
-    const cv::Point lo = a_first ? a : b, hi = a_first ? b : a;
-    if (!seen.emplace(lo.x, lo.y, hi.x, hi.y).second) continue;
-    pattern.push_back(BriefPair{static_cast<std::int8_t>(a.x), static_cast<std::int8_t>(a.y), static_cast<std::int8_t>(b.x),
-                                static_cast<std::int8_t>(b.y)});
-  }
-  return pattern;
-}
-
-OrbExtractor::OrbExtractor(const OrbParams& params) : params_(params), pattern_(makeBriefPattern()) {
+OrbExtractor::OrbExtractor(const OrbParams& params) : params_(params), pattern_(standardOrbPattern()) {
   if (params_.n_levels < 1 || params_.scale_factor <= 1.0 || params_.n_features < 0)
     throw InputError("orb: need n_levels >= 1, scale_factor > 1 and n_features >= 0");
   double scale = 1.0;
@@ -331,8 +297,19 @@ ImagePyramid OrbExtractor::buildPyramid(const cv::Mat& image) const {
                         std::max(1, static_cast<int>(std::lround(gray.rows / scale_factors_[l]))));
     cv::resize(pyramid.levels[l - 1], pyramid.levels[l], size, 0, 0, cv::INTER_LINEAR);
   }
-  for (int l = 0; l < params_.n_levels; ++l)
-    cv::GaussianBlur(pyramid.levels[l], pyramid.blurred[l], cv::Size(7, 7), 2.0, 2.0, cv::BORDER_REFLECT_101);
+  // Blurred as cv::ORB blurs its levels, so that the descriptors are its bit for
+  // bit: in place, in a view into a copy with a reflected border. OpenCV blurs a
+  // view with a float kernel but a whole 8-bit image with a fixed-point one, and
+  // the two round differently.
+  constexpr int kBlurRadius = 3;
+  for (int l = 0; l < params_.n_levels; ++l) {
+    const cv::Mat& level = pyramid.levels[l];
+    cv::Mat padded;
+    cv::copyMakeBorder(level, padded, kBlurRadius, kBlurRadius, kBlurRadius, kBlurRadius, cv::BORDER_REFLECT_101);
+    cv::Mat view = padded(cv::Rect(kBlurRadius, kBlurRadius, level.cols, level.rows));
+    cv::GaussianBlur(view, view, cv::Size(7, 7), 2.0, 2.0, cv::BORDER_REFLECT_101);
+    pyramid.blurred[l] = view;
+  }
   return pyramid;
 }
 
@@ -403,6 +380,20 @@ void OrbExtractor::extract(const ImagePyramid& pyramid, std::vector<cv::KeyPoint
     cv::KeyPoint out = kp;
     out.pt = kept[i].level0;
     keypoints.push_back(out);
+  }
+}
+
+void OrbExtractor::describe(const cv::Mat& blurred_level, const std::vector<cv::KeyPoint>& level_keypoints,
+                            cv::Mat& descriptors) const {
+  if (blurred_level.type() != CV_8UC1) throw InputError("OrbExtractor::describe: expected an 8-bit grey level image");
+  const cv::Rect inside(kEdgeBorder, kEdgeBorder, blurred_level.cols - 2 * kEdgeBorder,
+                        blurred_level.rows - 2 * kEdgeBorder);
+  descriptors.create(static_cast<int>(level_keypoints.size()), kOrbDescriptorBytes, CV_8U);
+  for (std::size_t i = 0; i < level_keypoints.size(); ++i) {
+    const cv::Point p(cvRound(level_keypoints[i].pt.x), cvRound(level_keypoints[i].pt.y));
+    if (!inside.contains(p)) throw InputError("OrbExtractor::describe: keypoint closer than kEdgeBorder to the border");
+    computeDescriptor(blurred_level, p, level_keypoints[i].angle, pattern_x_.data(), pattern_y_.data(),
+                      descriptors.ptr<uchar>(static_cast<int>(i)));
   }
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 // ORB features: FAST corners spread evenly over every pyramid level, oriented by
-// intensity centroid, described by 256-bit rotated BRIEF.
+// intensity centroid, described by standard ORB descriptors (256-bit rotated
+// BRIEF with ORB's learned pattern, bit for bit as cv::ORB computes them).
 #include <cstdint>
 #include <vector>
 
@@ -19,24 +20,23 @@ struct ImagePyramid {
 };
 
 // One BRIEF test: bit = I(p1) < I(p2), offsets in pixels from the keypoint
-// before rotation. All points lie within radius 15 of the centre.
+// before rotation.
 struct BriefPair {
   std::int8_t x1, y1, x2, y2;
 };
 
-// The 256 BRIEF tests, generated deterministically (see docs/FEATURES.md):
-// both points of a pair drawn from an isotropic Gaussian (sigma = 31/5, BRIEF's
-// "G II"), rejected outside the radius-15 disc, no repeated pair. The normal
-// deviates come from a fixed-seed std::mt19937 summed Irwin-Hall style (12
-// uniforms), which needs no libm call, so the table is the same on every platform.
-std::vector<BriefPair> makeBriefPattern();
+// The 256 tests of standard ORB (Rublee et al., ICCV 2011), in order: the
+// learned pattern cv::ORB and ORB-SLAM use, so that our descriptors are the
+// ones other tools compute and ORB vocabularies quantise. Coordinates lie in
+// [-13, 12]; rotated, a point stays within 18.4 px of the centre.
+std::vector<BriefPair> standardOrbPattern();
 
 constexpr int kOrbDescriptorBytes = 32;
 
 class OrbExtractor {
  public:
-  // Keypoints stay this many pixels inside every level, so the 31x31 patch
-  // (rotated: radius <= 15.7 after rounding) never leaves the image.
+  // Keypoints stay this many pixels inside every level, so the rotated test
+  // points (|offset| <= 18.4, at most 18 px after rounding) never leave the image.
   static constexpr int kEdgeBorder = 19;
   static constexpr int kPatchRadius = 15;
   static constexpr int kCellSize = 30;  // FAST cells, in level pixels
@@ -70,6 +70,14 @@ class OrbExtractor {
   // with ratio 1/scale_factor (finer levels get more), summing to n_features.
   std::vector<int> levelQuotas(int n_features) const;
   const std::vector<BriefPair>& pattern() const { return pattern_; }
+
+  // Descriptors of keypoints given in one level's pixels (pt rounded to the
+  // nearest pixel, angle in degrees), sampled on that level's blurred image
+  // (ImagePyramid::blurred): what extract() computes for its keypoints, and
+  // what cv::ORB::compute gives for the same keypoints on the unblurred level.
+  // Throws InputError for a keypoint closer than kEdgeBorder to the border.
+  void describe(const cv::Mat& blurred_level, const std::vector<cv::KeyPoint>& level_keypoints,
+                cv::Mat& descriptors) const;
 
  private:
   OrbParams params_;

@@ -62,7 +62,7 @@ int searchLoopByProjection(const KeyFrame& current, const Sim3& S_cw, const std:
         best_index = j;
       }
     }
-    if (best_index >= 0 && best_distance <= kHammingThresholdLow) {
+    if (best_index >= 0 && best_distance <= kHammingThresholdGuided) {
       matched[best_index] = point;
       ++added;
     }

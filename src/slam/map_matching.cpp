@@ -157,7 +157,7 @@ int searchByDescriptor(const KeyFrame& keyframe, const Frame& frame, std::vector
     if (!point || point->isBad()) continue;
     const uint8_t* descriptor = keyframe.descriptors.ptr<uint8_t>(i);
     const NearestTwo best = nearestTwo(descriptor, frame.descriptors, every_feature);
-    if (best.index < 0 || best.distance > kHammingThresholdLow) continue;
+    if (best.index < 0 || best.distance > kHammingThresholdGuided) continue;
     if (best.second_index >= 0 && best.distance >= ratio * best.second_distance) continue;
     if (best.distance >= best_distance_at[best.index]) continue;
     if (!matches[best.index]) ++count;
@@ -208,7 +208,7 @@ int searchByBoW(const KeyFrame& keyframe, const Frame& frame, const FeatureVecto
     if (!point || point->isBad()) return;
     const NearestTwo best = nearestUsable(keyframe.descriptors.ptr<uint8_t>(i), frame.descriptors, frame_indices,
                                           [&](int j) { return !matches[j]; }, usable);
-    if (best.index < 0 || best.distance > kHammingThresholdLow) return;
+    if (best.index < 0 || best.distance > kHammingThresholdGuided) return;
     if (best.second_index >= 0 && best.distance >= ratio * best.second_distance) return;
     matches[best.index] = point;
     rotation.add(keyframe.keypoints[i].angle, frame.keypoints[best.index].angle, best.index);
@@ -237,7 +237,7 @@ int searchByBoW(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>
                                             return !taken2[j] && point2 && !point2->isBad();
                                           },
                                           usable);
-    if (best.index < 0 || best.distance > kHammingThresholdLow) return;
+    if (best.index < 0 || best.distance > kHammingThresholdGuided) return;
     if (best.second_index >= 0 && best.distance >= ratio * best.second_distance) return;
     matches[i] = kf2.mapPoint(best.index);
     taken2[best.index] = true;
@@ -296,7 +296,7 @@ int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius
         best_index = j;
       }
     }
-    if (best_index < 0 || best_distance > kHammingThresholdLow) continue;
+    if (best_index < 0 || best_distance > kHammingThresholdGuided) continue;
     MapPoint* existing = keyframe->mapPoint(best_index);
     if (existing && !existing->isBad()) {
       if (existing->observationCount() > point->observationCount())
@@ -322,7 +322,9 @@ std::vector<std::pair<int, int>> searchForTriangulation(const KeyFrame& kf1, con
   for (size_t i = 0; i < kf2.size(); ++i) matched2[i] = kf2.mapPoint(i) != nullptr;
   const cv::Matx33d F21 =
       fundamentalFromPoses(kf1.pose(), kf2.pose(), kf1.camera().Keigen(), kf2.camera().Keigen());
-  return searchForTriangulation(kf1.view(), kf2.view(), F21, kf1.pyramid().sigma2, matched1, matched2);
+  TriangulationSearchParams params;
+  params.max_distance = kHammingThresholdGuided;  // the candidates lie on the epipolar line
+  return searchForTriangulation(kf1.view(), kf2.view(), F21, kf1.pyramid().sigma2, matched1, matched2, params);
 }
 
 }  // namespace vslam

@@ -173,6 +173,9 @@ Command addRunCommand(CLI::App& app) {
                 "report.json frames_skipped)");
   cli->add_flag("--no-render", options->pipeline.no_render,
                 "Write no PNG figures at the end (default: render them into the output folder, as `vslam render`)");
+  cli->add_option("--save-map", options->pipeline.save_map,
+                  "Save the map at the end (also when interrupted) to this SQLite file, written whole or not at all "
+                  "(docs/MAPS.md) (default: none)");
   cli->add_flag("--info", options->info_only,
                 "Only find the sequence and print what it holds (frames, camera, ground truth); run nothing "
                 "(default: off)");

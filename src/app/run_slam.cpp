@@ -588,6 +588,16 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
     for (const ExportedMapPoint& point : system.mapPoints()) cloud.push_back({point.position, point.bgr, point.class_id});
     writeFileAtomically(out_dir + "/map.ply", [&](const std::string& temporary) { writeMapPly(temporary, cloud); });
   });
+  bool map_saved = false;
+  if (!options.save_map.empty())
+    write([&] {
+      const auto save_start = std::chrono::steady_clock::now();
+      system.saveMap(options.save_map, sequence.name);
+      const double save_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - save_start).count();
+      spdlog::info("map saved to {} in {:.2f} s", options.save_map, save_s);
+      system.timer().record("save_map", 1000.0 * save_s);
+      map_saved = true;
+    });
   const bool kitti = sequence.kind == SequenceKind::Kitti;
   std::vector<int> trajectory_frames;  // KITTI: the frame of each pose, by its timestamp (times.txt increases)
   if (kitti) {
@@ -654,6 +664,8 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
       }
   }
   report["final_ba"] = outcome.final_ba;
+  // The saved map (docs/MAPS.md); null when none was asked for or it could not be written (see "error").
+  report["map_file"] = map_saved ? nlohmann::json(options.save_map) : nlohmann::json(nullptr);
   report["relocalisations"] = stats.relocalisations;
   // Where each loop closed: the two keyframes' timestamps (loop keyframes are never culled).
   std::map<long, double> keyframe_timestamp;

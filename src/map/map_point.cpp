@@ -21,6 +21,24 @@ void MapPoint::addObservation(KeyFrame* keyframe, int keypoint) {
   observation_weight_ += keyframe->observationWeight(keypoint);
 }
 
+MapPoint::SavedState MapPoint::savedState() const {
+  return {descriptor_,     normal_,    min_distance_,     max_distance_, visible_, found_,
+          class_id_,       class_confidence_, colour_,    confirmed_min_observations_};
+}
+
+void MapPoint::restoreState(const SavedState& state) {
+  descriptor_ = state.descriptor.clone();
+  normal_ = state.normal;
+  min_distance_ = state.min_distance;
+  max_distance_ = state.max_distance;
+  visible_ = state.visible;
+  found_ = state.found;
+  class_id_ = state.class_id;
+  class_confidence_ = state.class_confidence;
+  colour_ = state.colour;
+  confirmed_min_observations_ = state.confirmed_min_observations;
+}
+
 void MapPoint::eraseObservation(KeyFrame* keyframe) {
   auto it = observations_.find(keyframe);
   if (it == observations_.end()) return;

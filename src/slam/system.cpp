@@ -6,6 +6,7 @@
 
 #include "vslam/detect/detection_stage.hpp"
 #include "vslam/map/map.hpp"
+#include "vslam/map_io/map_database.hpp"
 #include "vslam/place/keyframe_database.hpp"
 #include "vslam/place/vocabulary.hpp"
 #include "vslam/slam/frame_builder.hpp"
@@ -30,7 +31,8 @@ System::System(const Config& config, const SystemOptions& options)
   if (options_.after_keyframe_mapped) local_mapping_->setAfterKeyFrameHook(options_.after_keyframe_mapped);
   // An empty vocabulary path switches place recognition off; a bad file is an input error.
   if (!config_.loop.vocabulary.empty()) {
-    vocabulary_ = std::make_unique<Vocabulary>(Vocabulary::load(resolveVocabularyPath(config_.loop.vocabulary)));
+    vocabulary_path_ = resolveVocabularyPath(config_.loop.vocabulary);
+    vocabulary_ = std::make_unique<Vocabulary>(Vocabulary::load(vocabulary_path_));
     database_ = std::make_unique<KeyframeDatabase>();
     if (config_.loop.enabled)
       loop_closing_ =
@@ -262,6 +264,22 @@ std::vector<ObjectLandmark> System::objectMap(const ObjectMapParams& params) con
   }
   const double link_distance = linkDistanceFor(percentile(std::move(depths), 0.5), params);
   return buildObjectMap(labelled, link_distance, params, detection_->classNames());
+}
+
+void System::saveMap(const std::string& path, const std::string& sequence) const {
+  MapFileHeader header;
+  header.mode = config_.sensor;
+  header.camera = config_.camera;
+  header.orb_levels = config_.orb.n_levels;
+  header.orb_scale_factor = config_.orb.scale_factor;
+  // Computed when first needed: a run that saves no map does not read the vocabulary twice.
+  header.vocabulary_checksum = vocabularyChecksum(vocabulary_path_);
+  header.vocabulary_file = vocabulary_path_.empty() ? "none" : vocabulary_path_;
+  header.sequence = sequence;
+  const std::vector<ObjectLandmark> objects = objectMap();  // takes the map lock itself
+  const std::vector<std::string> class_names = detection_ ? detection_->classNames() : std::vector<std::string>();
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  saveMapDatabase(path, *map_, header, objects, class_names);
 }
 
 int System::lastTrackedPoints() const { return tracking_->lastTrackedPoints(); }

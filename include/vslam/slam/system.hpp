@@ -130,6 +130,10 @@ class System {
   // the link distance is relative to the median keyframe-to-point depth.
   std::vector<ObjectLandmark> objectMap(const ObjectMapParams& params = ObjectMapParams()) const;
   int lastTrackedPoints() const;
+  // Writes the whole map, its object landmarks and what it was made with to
+  // `path` (SQLite, docs/MAPS.md), atomically; `sequence` is recorded for
+  // people. Throws InputError naming `path` when it cannot be written.
+  void saveMap(const std::string& path, const std::string& sequence) const;
   StageTimer& timer() { return timer_; }
   // Loop Closing's bookkeeping (empty state without it); waits for the keyframe in hand.
   LoopClosingState loopClosingState() const;
@@ -143,6 +147,7 @@ class System {
   StageTimer timer_;
   std::unique_ptr<Map> map_;
   std::unique_ptr<Vocabulary> vocabulary_;  // null: no relocalisation by BoW, no loop closing
+  std::string vocabulary_path_;              // "" without a vocabulary
   std::unique_ptr<KeyframeDatabase> database_;
   std::unique_ptr<DetectionStage> detection_;  // nullptr for --detector none; before frame_builder_, which uses its class ids
   std::unique_ptr<FrameBuilder> frame_builder_;

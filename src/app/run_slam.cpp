@@ -552,7 +552,12 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
     throw InputError("--localize does not change the map, so --save-map would only copy it: drop one of them");
   System system(sequence.config, system_options);
   std::pair<int, int> loaded{0, 0};  // keyframes and points of the loaded map
-  if (!options.load_map.empty()) loaded = system.loadMap(options.load_map, options.localize);
+  if (!options.load_map.empty()) {
+    const auto load_start = std::chrono::steady_clock::now();
+    loaded = system.loadMap(options.load_map, options.localize);
+    system.timer().record("load_map",
+                          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - load_start).count());
+  }
   std::error_code error;
   fs::create_directories(out_dir, error);
   if (error) throw InputError(out_dir, 0, "cannot create the output folder: " + error.message());

@@ -78,7 +78,7 @@ int run(RunCommandOptions options) {
   Sequence sequence = openOrFetch(options);
   const size_t total_frames = sequence.frames.size();
   warnIfIncomplete(sequence, options.seq);
-  if (options.pipeline.start_frame < 0 || static_cast<size_t>(options.pipeline.start_frame) >= total_frames)
+  if (options.pipeline.start_frame > 0 && static_cast<size_t>(options.pipeline.start_frame) >= total_frames)
     throw InputError(sequence.root, 0,
                      "--start-frame " + std::to_string(options.pipeline.start_frame) + " is past the sequence's " +
                          std::to_string(total_frames) + " frames");
@@ -172,7 +172,7 @@ Command addRunCommand(CLI::App& app) {
                 "(default: off, every frame is processed and no keyframe is dropped)");
   cli->add_flag("--no-fetch", options->no_fetch,
                 "Do not download a TUM sequence that is not found (default: fetch with tools/fetch_dataset.sh)");
-  cli->add_option("--max-frames", options->max_frames, "Process only the first N frames; 0 = all")
+  cli->add_option("--max-frames", options->max_frames, "Process only N frames (the first N, or N from --start-frame); 0 = all")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cli->add_flag("--strict", options->pipeline.strict,

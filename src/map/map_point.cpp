@@ -22,8 +22,18 @@ void MapPoint::addObservation(KeyFrame* keyframe, int keypoint) {
 }
 
 MapPoint::SavedState MapPoint::savedState() const {
-  return {descriptor_,     normal_,    min_distance_,     max_distance_, visible_, found_,
-          class_id_,       class_confidence_, colour_,    confirmed_min_observations_};
+  SavedState state;
+  state.descriptor = descriptor_;
+  state.normal = normal_;
+  state.min_distance = min_distance_;
+  state.max_distance = max_distance_;
+  state.visible = visible_;
+  state.found = found_;
+  state.class_id = class_id_;
+  state.class_confidence = class_confidence_;
+  state.colour = colour_;
+  state.confirmed_min_observations = confirmed_min_observations_;
+  return state;
 }
 
 void MapPoint::restoreState(const SavedState& state) {

@@ -310,7 +310,7 @@ MapFileHeader readHeader(SqliteDatabase& db) {
   header.orb_levels = integer("orb_levels");
   try {
     header.orb_scale_factor = std::stod(value("orb_scale_factor"));
-  } catch (const std::invalid_argument&) {
+  } catch (const std::exception&) {  // std::stod's invalid_argument and out_of_range
     throw InputError(path, 0, "map_info orb_scale_factor is not a number");
   }
   header.vocabulary_checksum = value("vocabulary_checksum");
@@ -470,8 +470,12 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
     SqliteStatement keypoints = db.prepare(
         "SELECT idx, x, y, undistorted_x, undistorted_y, size, angle, response, octave, class_id, detection_id, red, "
         "green, blue, depth, u_right, descriptor FROM keypoints WHERE keyframe_id = ? ORDER BY idx");
+    long previous_id = -1;
     while (rows.step()) {
       const long id = static_cast<long>(rows.integer(0));
+      // Ids are the tables' primary keys, so unique unless the schema itself was damaged.
+      if (id <= previous_id) refuse("keyframe id " + std::to_string(id) + " is not unique or not >= 0");
+      previous_id = id;
       Frame frame;
       frame.id = static_cast<long>(rows.integer(1));
       frame.index = static_cast<int>(rows.integer(2));
@@ -566,8 +570,11 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
         "SELECT id, x, y, z, reference_keyframe_id, first_keyframe_id, descriptor, normal_x, normal_y, normal_z, "
         "min_distance, max_distance, visible, found, class_id, class_confidence, red, green, blue, "
         "confirmed_min_observations FROM map_points ORDER BY id");
+    long previous_id = -1;
     while (rows.step()) {
       const long id = static_cast<long>(rows.integer(0));
+      if (id <= previous_id) refuse("map point id " + std::to_string(id) + " is not unique or not >= 0");
+      previous_id = id;
       const std::string where = "map point " + std::to_string(id);
       KeyFrame* reference = keyframeAt(rows.integer(4), where + "'s reference");
       MapPoint* point = map.restoreMapPoint(id, Vec3(rows.real(1), rows.real(2), rows.real(3)), reference,

@@ -7,11 +7,21 @@
 #include "vslam/core/error.hpp"
 
 namespace vslam {
+namespace {
+
+// SQLite's messages may quote a damaged schema, newlines included: an error stays one line.
+std::string oneLine(std::string message) {
+  for (char& c : message)
+    if (c == '\n' || c == '\r') c = ' ';
+  return message;
+}
+
+}  // namespace
 
 SqliteStatement::SqliteStatement(sqlite3* database, const std::string& path, const std::string& sql)
     : database_(database), path_(path) {
   if (sqlite3_prepare_v2(database_, sql.c_str(), -1, &statement_, nullptr) != SQLITE_OK) {
-    const std::string reason = sqlite3_errmsg(database_);
+    const std::string reason = oneLine(sqlite3_errmsg(database_));
     sqlite3_finalize(statement_);
     statement_ = nullptr;
     throw InputError(path_, 0, "SQLite: " + reason);
@@ -26,7 +36,7 @@ SqliteStatement::SqliteStatement(SqliteStatement&& other) noexcept
 }
 
 void SqliteStatement::fail(const std::string& what) const {
-  throw InputError(path_, 0, "SQLite: " + what + ": " + sqlite3_errmsg(database_));
+  throw InputError(path_, 0, "SQLite: " + what + ": " + oneLine(sqlite3_errmsg(database_)));
 }
 
 SqliteStatement& SqliteStatement::bind(int index, long long value) {
@@ -95,7 +105,7 @@ SqliteDatabase::SqliteDatabase(const std::string& path, Access access) : path_(p
     throw InputError(path, 0, "no such map file");
   const int flags = access == Access::ReadOnly ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
   if (sqlite3_open_v2(path.c_str(), &database_, flags, nullptr) != SQLITE_OK) {
-    const std::string reason = database_ ? sqlite3_errmsg(database_) : "out of memory";
+    const std::string reason = database_ ? oneLine(sqlite3_errmsg(database_)) : "out of memory";
     sqlite3_close(database_);
     database_ = nullptr;
     throw InputError(path, 0, "SQLite cannot open it: " + reason);
@@ -107,7 +117,7 @@ SqliteDatabase::~SqliteDatabase() { sqlite3_close(database_); }
 void SqliteDatabase::execute(const std::string& sql) {
   char* message = nullptr;
   if (sqlite3_exec(database_, sql.c_str(), nullptr, nullptr, &message) != SQLITE_OK) {
-    const std::string reason = message ? message : sqlite3_errmsg(database_);
+    const std::string reason = oneLine(message ? message : sqlite3_errmsg(database_));
     sqlite3_free(message);
     throw InputError(path_, 0, "SQLite: " + reason);
   }

@@ -527,7 +527,9 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
       keyframe->not_erase = not_erase.count(id) > 0;
     }
   }
-  if (map.allKeyFrames().empty()) refuse("no keyframes");
+  // A run that never initialised saves an empty map; there is nothing to start from.
+  if (map.allKeyFrames().empty())
+    throw InputError(path, 0, "the map has no keyframes (the run that saved it never initialised)");
 
   // Spanning tree: one root, every parent a keyframe of the map, no cycle.
   int roots = 0;

@@ -465,6 +465,9 @@ void printSummary(const nlohmann::json& report, System& system, const Sequence& 
   if (stats.initialised_at_index >= 0) std::cout << " (initialised at frame " << stats.initialised_at_index << ")";
   if (!outcome.skipped.empty()) std::cout << ", " << outcome.skipped.size() << " skipped (unreadable)";
   std::cout << "\nkeyframes: " << stats.keyframes << ", map points: " << stats.map_points << "\n";
+  if (!options.load_map.empty())
+    std::cout << "localised in the loaded map (" << options.load_map << (options.localize ? ", localisation only" : "")
+              << "): " << stats.frames_in_loaded_map << " / " << stats.frames << " frames\n";
   if (report["ate"].is_object()) {
     const nlohmann::json& kf = report["ate"]["keyframes"];
     if (kf.is_null())
@@ -543,7 +546,18 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   SystemOptions system_options;
   system_options.deterministic = options.deterministic;
   system_options.realtime = options.realtime;
+  if (options.localize && options.load_map.empty())
+    throw InputError("--localize needs --load-map: localisation is in a map saved by an earlier run");
+  if (options.localize && !options.save_map.empty())
+    throw InputError("--localize does not change the map, so --save-map would only copy it: drop one of them");
   System system(sequence.config, system_options);
+  std::pair<int, int> loaded{0, 0};  // keyframes and points of the loaded map
+  if (!options.load_map.empty()) {
+    const auto load_start = std::chrono::steady_clock::now();
+    loaded = system.loadMap(options.load_map, options.localize);
+    system.timer().record("load_map",
+                          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - load_start).count());
+  }
   std::error_code error;
   fs::create_directories(out_dir, error);
   if (error) throw InputError(out_dir, 0, "cannot create the output folder: " + error.message());
@@ -588,6 +602,16 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
     for (const ExportedMapPoint& point : system.mapPoints()) cloud.push_back({point.position, point.bgr, point.class_id});
     writeFileAtomically(out_dir + "/map.ply", [&](const std::string& temporary) { writeMapPly(temporary, cloud); });
   });
+  bool map_saved = false;
+  if (!options.save_map.empty())
+    write([&] {
+      const auto save_start = std::chrono::steady_clock::now();
+      system.saveMap(options.save_map, sequence.name);
+      const double save_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - save_start).count();
+      spdlog::info("map saved to {} in {:.2f} s", options.save_map, save_s);
+      system.timer().record("save_map", 1000.0 * save_s);
+      map_saved = true;
+    });
   const bool kitti = sequence.kind == SequenceKind::Kitti;
   std::vector<int> trajectory_frames;  // KITTI: the frame of each pose, by its timestamp (times.txt increases)
   if (kitti) {
@@ -654,6 +678,18 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
       }
   }
   report["final_ba"] = outcome.final_ba;
+  // A run that started in a saved map: the map, and how many frames were localised against it.
+  if (options.load_map.empty()) {
+    report["loaded_map"] = nullptr;
+  } else {
+    report["loaded_map"] = {{"file", options.load_map},
+                            {"localize", options.localize},
+                            {"keyframes", loaded.first},
+                            {"map_points", loaded.second}};
+    report["frames_localised_in_loaded_map"] = stats.frames_in_loaded_map;
+  }
+  // The saved map (docs/MAPS.md); null when none was asked for or it could not be written (see "error").
+  report["map_file"] = map_saved ? nlohmann::json(options.save_map) : nlohmann::json(nullptr);
   report["relocalisations"] = stats.relocalisations;
   // Where each loop closed: the two keyframes' timestamps (loop keyframes are never culled).
   std::map<long, double> keyframe_timestamp;

@@ -6,6 +6,7 @@
 
 #include "vslam/detect/detection_stage.hpp"
 #include "vslam/map/map.hpp"
+#include "vslam/map_io/map_database.hpp"
 #include "vslam/place/keyframe_database.hpp"
 #include "vslam/place/vocabulary.hpp"
 #include "vslam/slam/frame_builder.hpp"
@@ -30,7 +31,8 @@ System::System(const Config& config, const SystemOptions& options)
   if (options_.after_keyframe_mapped) local_mapping_->setAfterKeyFrameHook(options_.after_keyframe_mapped);
   // An empty vocabulary path switches place recognition off; a bad file is an input error.
   if (!config_.loop.vocabulary.empty()) {
-    vocabulary_ = std::make_unique<Vocabulary>(Vocabulary::load(resolveVocabularyPath(config_.loop.vocabulary)));
+    vocabulary_path_ = resolveVocabularyPath(config_.loop.vocabulary);
+    vocabulary_ = std::make_unique<Vocabulary>(Vocabulary::load(vocabulary_path_));
     database_ = std::make_unique<KeyframeDatabase>();
     if (config_.loop.enabled)
       loop_closing_ =
@@ -130,7 +132,8 @@ bool System::finish(const FinishOptions& finish_options) {
     if (loop_closing_) loop_closing_->finish();
   }
   rethrowWorkerFailure();
-  if (!config_.loop.final_ba || !finish_options.final_ba || tracking_->state() == TrackingState::NotInitialized)
+  if (!config_.loop.final_ba || !finish_options.final_ba || tracking_->state() == TrackingState::NotInitialized ||
+      localize_)
     return false;
   frames_before_final_ba_ = frameTrajectory();
   keyframes_before_final_ba_ = keyframeTrajectory();
@@ -214,6 +217,12 @@ SystemStats System::stats() const {
   stats.keyframe_waits = tracking_->keyframeWaits();
   stats.frames_without_depth = frames_without_depth_;
   if (loop_closing_) stats.implausible_loops_rejected = loop_closing_->implausibleLoopsRejected();
+  if (loaded_max_keyframe_id_ >= 0) {
+    stats.frames_in_loaded_map = 0;
+    for (const FrameRecord& record : tracking_->records())
+      if (record.tracked && record.reference && record.reference->id() <= loaded_max_keyframe_id_)
+        ++stats.frames_in_loaded_map;
+  }
   return stats;
 }
 
@@ -262,6 +271,49 @@ std::vector<ObjectLandmark> System::objectMap(const ObjectMapParams& params) con
   }
   const double link_distance = linkDistanceFor(percentile(std::move(depths), 0.5), params);
   return buildObjectMap(labelled, link_distance, params, detection_->classNames());
+}
+
+void System::saveMap(const std::string& path, const std::string& sequence) const {
+  MapFileHeader header;
+  header.mode = config_.sensor;
+  header.camera = config_.camera;
+  header.orb_levels = config_.orb.n_levels;
+  header.orb_scale_factor = config_.orb.scale_factor;
+  // Computed when first needed: a run that saves no map does not read the vocabulary twice.
+  header.vocabulary_checksum = vocabularyChecksum(vocabulary_path_);
+  header.vocabulary_file = vocabulary_path_.empty() ? "none" : vocabulary_path_;
+  header.sequence = sequence;
+  const std::vector<ObjectLandmark> objects = objectMap();  // takes the map lock itself
+  const std::vector<std::string> class_names = detection_ ? detection_->classNames() : std::vector<std::string>();
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  saveMapDatabase(path, *map_, header, objects, class_names);
+}
+
+std::pair<int, int> System::loadMap(const std::string& path, bool localize) {
+  if (next_frame_id_ > 0) throw std::logic_error("System::loadMap: only before the first frame");
+  const MapFileHeader header = readMapHeader(path);
+  MapRequirements required;
+  required.mode = config_.sensor;
+  required.camera = config_.camera;
+  required.orb_levels = config_.orb.n_levels;
+  required.orb_scale_factor = config_.orb.scale_factor;
+  required.vocabulary_checksum = vocabularyChecksum(vocabulary_path_);
+  checkMapCompatible(path, header, required);
+  std::pair<int, int> loaded;
+  {
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    loadMapDatabase(path, *map_, frame_builder_->camera(), frame_builder_->pyramid());
+    // Relocalisation and loop detection find the old keyframes by their bags of words.
+    for (KeyFrame* keyframe : map_->keyframes())
+      if (database_ && keyframe->hasBow()) database_->add(keyframe->id(), keyframe->bow);
+    loaded_max_keyframe_id_ = map_->maxKeyFrameId();
+    loaded = {static_cast<int>(map_->keyframeCount()), static_cast<int>(map_->mapPointCount())};
+  }
+  localize_ = localize;
+  tracking_->startInLoadedMap(localize);
+  spdlog::info("loaded map {}: {} keyframes, {} map points ({}{})", path, loaded.first, loaded.second,
+               header.sequence, localize ? "; localisation only" : "; mapping continues in it");
+  return loaded;
 }
 
 int System::lastTrackedPoints() const { return tracking_->lastTrackedPoints(); }

@@ -53,6 +53,12 @@ Tracking::Tracking(const Config& config, Map& map, LocalMapping& local_mapping, 
                    KeyFrameInsertion insertion)
     : config_(config), map_(map), local_mapping_(local_mapping), timer_(timer), insertion_(insertion) {}
 
+void Tracking::startInLoadedMap(bool localization_only) {
+  map_loaded_ = true;
+  localization_only_ = localization_only;
+  state_ = TrackingState::Lost;  // the first frame relocalises in the loaded map
+}
+
 void Tracking::refreshLastFramePose() {
   if (!last_frame_ || !last_frame_->has_pose || records_.empty()) return;
   const FrameRecord& last = records_.back();
@@ -121,7 +127,7 @@ bool Tracking::track(Frame& frame) {
       velocity_ = frame.T_cw * last_frame_->T_cw.inverse();
     else
       velocity_.reset();
-    if (needNewKeyFrame(frame)) {
+    if (!localization_only_ && needNewKeyFrame(frame)) {
       if (insertion_ == KeyFrameInsertion::WaitForMapping && !local_mapping_.acceptsKeyFrames()) {
         // Back-pressure: let Local Mapping finish the keyframe in hand. The map
         // may change meanwhile (local BA, culling, a loop correction), so the
@@ -160,7 +166,7 @@ bool Tracking::track(Frame& frame) {
   records_.push_back(record);
   // Early failure: a map just initialised (a few keyframes) is not worth
   // keeping. A larger map is kept while relocalisation can still succeed.
-  const bool reset = !ok && map_.keyframeCount() <= kResetMaxKeyFrames;
+  const bool reset = !ok && !map_loaded_ && map_.keyframeCount() <= kResetMaxKeyFrames;
   lock.unlock();
 
   if (insertion_ == KeyFrameInsertion::Synchronous) local_mapping_.processQueued();
@@ -542,7 +548,7 @@ bool Tracking::trackLocalMap(Frame& frame) {
   for (size_t i = 0; i < frame.size(); ++i) {
     MapPoint* point = frame.map_points[i];
     if (!point) continue;
-    point->increaseVisible();
+    if (!localization_only_) point->increaseVisible();
     point->last_frame_seen = frame.id;
     point->track_in_view = false;
   }
@@ -550,7 +556,7 @@ bool Tracking::trackLocalMap(Frame& frame) {
   for (MapPoint* point : local_points_) {
     if (point->last_frame_seen == frame.id || point->isBad()) continue;
     if (isInFrustum(point, frame)) {
-      point->increaseVisible();
+      if (!localization_only_) point->increaseVisible();
       ++to_match;
     }
   }
@@ -564,7 +570,7 @@ bool Tracking::trackLocalMap(Frame& frame) {
   for (size_t i = 0; i < frame.size(); ++i) {
     MapPoint* point = frame.map_points[i];
     if (!point || frame.outlier[i]) continue;
-    point->increaseFound();
+    if (!localization_only_) point->increaseFound();
     if (point->observationCount() > 0) ++matches_inliers_;
   }
   const bool recently_relocalised =

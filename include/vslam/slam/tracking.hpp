@@ -74,6 +74,15 @@ class Tracking {
   // Frames the constant-velocity model failed to track (the reference keyframe was tried instead).
   int motionModelMisses() const { return motion_model_misses_; }
 
+  // A map loaded from a file (System::loadMap): the first frame relocalises
+  // in it instead of initialising a new one, and the map is never reset.
+  // `localization_only` is ORB-SLAM2's localisation mode: no keyframe is made
+  // and nothing in the map changes (not even its points' found/visible
+  // counts); tracking relocalises whenever it is lost and otherwise tracks
+  // frame to frame (motion model) and against the local map.
+  void startInLoadedMap(bool localization_only);
+  bool localizationOnly() const { return localization_only_; }
+
   // Tracks one frame; returns true when its pose is known.
   bool track(Frame& frame);
 
@@ -137,6 +146,8 @@ class Tracking {
   int keyframe_waits_ = 0;
   int motion_model_misses_ = 0;
   bool last_keyframe_was_weak_ = false;  // made with fewer than min_tracked_points tracked
+  bool map_loaded_ = false;          // started in a loaded map: never reset it
+  bool localization_only_ = false;   // --localize: the map is read, never changed
 };
 
 }  // namespace vslam

@@ -30,6 +30,9 @@ Command addSynthCommand(CLI::App& app) {
   command.cli->add_option("--radius", options->room.path_radius_m, "Radius of the camera's circle, metres")
       ->capture_default_str();
   command.cli->add_option("--seed", options->room.seed, "Seed of the panel textures")->capture_default_str();
+  command.cli->add_option("--moving-object", options->room.moving_object_image,
+                          "An image (e.g. a photo of a person) shown on a billboard that walks across the view "
+                          "during frames 60-210, for testing moving-object handling; its path goes to moving_object.txt");
   command.run = [options] {
     const RoomLoopParams& room = options->room;
     if (room.frames < 2) throw InputError("--frames must be at least 2");

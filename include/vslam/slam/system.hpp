@@ -76,6 +76,9 @@ struct SystemStats {
   int keyframe_waits = 0;   // keyframes that waited for Local Mapping (back-pressure)
   int implausible_loops_rejected = 0;
   int frames_without_depth = 0;  // RGB-D: frames without a paired depth image, tracked as monocular
+  // The motion check of --moving-classes boxes (all 0 without it).
+  int moving_boxes_checked = 0, moving_boxes_moving = 0, moving_boxes_parked = 0, moving_boxes_undecided = 0;
+  int moving_points_retired = 0;
 };
 
 // The detector's part of a run, for report.json's "detector".

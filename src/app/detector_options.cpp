@@ -19,6 +19,10 @@ void addDetectorOptions(CLI::App& command, DetectorOptions& options) {
   command.add_option("--dynamic-classes", options.dynamic_classes,
                      "Comma-separated classes whose keypoints are removed, e.g. person,car")
       ->delimiter(',');
+  command.add_option("--moving-classes", options.moving_classes,
+                     "Comma-separated classes whose boxes are checked for motion each frame: moving instances are "
+                     "kept out of tracking and mapping, parked ones stay (coco-movable: COCO's movable classes)")
+      ->delimiter(',');
 }
 
 void applyDetectorOptions(const DetectorOptions& options, DetectorParams& params) {
@@ -33,6 +37,7 @@ void applyDetectorOptions(const DetectorOptions& options, DetectorParams& params
   if (options.box_features) params.box_features = *options.box_features;
   if (options.dnn_target) params.dnn_target = *options.dnn_target;
   if (options.dynamic_classes) params.dynamic_classes = *options.dynamic_classes;
+  if (options.moving_classes) params.moving_classes = *options.moving_classes;
 }
 
 }  // namespace vslam::app

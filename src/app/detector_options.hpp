@@ -21,6 +21,7 @@ struct DetectorOptions {
   std::optional<int> box_features;
   std::optional<std::string> dnn_target;
   std::optional<std::vector<std::string>> dynamic_classes;
+  std::optional<std::vector<std::string>> moving_classes;
 };
 
 void addDetectorOptions(CLI::App& command, DetectorOptions& options);

@@ -691,6 +691,13 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   // The saved map (docs/MAPS.md); null when none was asked for or it could not be written (see "error").
   report["map_file"] = map_saved ? nlohmann::json(options.save_map) : nlohmann::json(nullptr);
   report["relocalisations"] = stats.relocalisations;
+  // Per frame and box of a --moving-classes class: what the motion check found.
+  report["moving_objects"] = {{"classes", sequence.config.detector.moving_classes},
+                              {"box_frames_checked", stats.moving_boxes_checked},
+                              {"moving", stats.moving_boxes_moving},
+                              {"parked", stats.moving_boxes_parked},
+                              {"undecided", stats.moving_boxes_undecided},
+                              {"map_points_retired", stats.moving_points_retired}};
   // Where each loop closed: the two keyframes' timestamps (loop keyframes are never culled).
   std::map<long, double> keyframe_timestamp;
   for (const ExportedKeyFrame& keyframe : system.keyFrames()) keyframe_timestamp[keyframe.id] = keyframe.timestamp;

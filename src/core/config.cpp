@@ -167,6 +167,7 @@ Config loadVslamYaml(const std::string& text, const std::string& path) {
   reader.optional(det, "detector", "box_features", d.box_features);
   reader.optional(det, "detector", "dnn_target", d.dnn_target);
   reader.optional(det, "detector", "dynamic_classes", d.dynamic_classes);
+  reader.optional(det, "detector", "moving_classes", d.moving_classes);
   return config;
 }
 

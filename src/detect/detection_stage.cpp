@@ -7,6 +7,7 @@ namespace vslam {
 DetectionStage::DetectionStage(const DetectorParams& params, StageTimer* timer)
     : params_(params), detector_(std::make_unique<YoloDetector>(params, locateModel(params))) {
   dynamic_class_ids_ = classIdsOf(params_.dynamic_classes, detector_->classNames(), detector_->files().names);
+  moving_class_ids_ = classIdsOf(params_.moving_classes, detector_->classNames(), detector_->files().names);
   YoloDetector* detector = detector_.get();
   async_ = std::make_unique<AsyncDetector>([detector, timer](const cv::Mat& bgr) {
     std::vector<Detection> detections = detector->detect(bgr);

@@ -6,10 +6,17 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "vslam/slam/moving_objects.hpp"
+
 namespace vslam {
 
-FrameBuilder::FrameBuilder(const Config& config, const PinholeCamera& camera, std::vector<int> dynamic_class_ids)
-    : config_(config), camera_(camera), extractor_(config.orb), dynamic_class_ids_(std::move(dynamic_class_ids)) {
+FrameBuilder::FrameBuilder(const Config& config, const PinholeCamera& camera, std::vector<int> dynamic_class_ids,
+                           std::vector<int> moving_class_ids)
+    : config_(config),
+      camera_(camera),
+      extractor_(config.orb),
+      dynamic_class_ids_(std::move(dynamic_class_ids)),
+      moving_class_ids_(std::move(moving_class_ids)) {
   pyramid_.levels = extractor_.levels();
   pyramid_.scale_factor = config.orb.scale_factor;
   pyramid_.scale = extractor_.scaleFactors();
@@ -73,6 +80,7 @@ Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& b
                             labels);
     frame.labels.resize(labels.size());
     for (size_t i = 0; i < labels.size(); ++i) frame.labels[i] = {labels[i].class_id, labels[i].detection_id};
+    labelMovableKeypoints(*detections, moving_class_ids_, frame);
     if (filter) {
       filter->stats = stats;
       filter->ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -21,8 +21,9 @@ System::System(const Config& config, const SystemOptions& options)
       options_(options),
       map_(std::make_unique<Map>()),
       detection_(makeDetectionStage(config.detector, &timer_)),
-      frame_builder_(std::make_unique<FrameBuilder>(config, config.camera,
-                                                    detection_ ? detection_->dynamicClassIds() : std::vector<int>())),
+      frame_builder_(std::make_unique<FrameBuilder>(
+          config, config.camera, detection_ ? detection_->dynamicClassIds() : std::vector<int>(),
+          detection_ ? detection_->movingClassIds() : std::vector<int>())),
       local_mapping_(std::make_unique<LocalMapping>(config, *map_, &timer_)),
       tracking_(std::make_unique<Tracking>(config, *map_, *local_mapping_, &timer_,
                                            options.deterministic ? KeyFrameInsertion::Synchronous
@@ -216,6 +217,12 @@ SystemStats System::stats() const {
   stats.map_resets = tracking_->mapResets();
   stats.keyframe_waits = tracking_->keyframeWaits();
   stats.frames_without_depth = frames_without_depth_;
+  const Tracking::MovingObjectStats& moving = tracking_->movingObjectStats();
+  stats.moving_boxes_checked = moving.boxes_checked;
+  stats.moving_boxes_moving = moving.moving;
+  stats.moving_boxes_parked = moving.parked;
+  stats.moving_boxes_undecided = moving.undecided;
+  stats.moving_points_retired = moving.points_retired;
   if (loop_closing_) stats.implausible_loops_rejected = loop_closing_->implausibleLoopsRejected();
   if (loaded_max_keyframe_id_ >= 0) {
     stats.frames_in_loaded_map = 0;

@@ -18,6 +18,7 @@
 #include "vslam/slam/local_mapping.hpp"
 #include "vslam/slam/loop_closing.hpp"
 #include "vslam/slam/map_matching.hpp"
+#include "vslam/slam/moving_objects.hpp"
 #include "vslam/slam/place_candidates.hpp"
 
 namespace vslam {
@@ -30,6 +31,7 @@ constexpr int kCloseUntrackedMany = 70;           // ...tracked < 100 and untrac
 constexpr int kNewKeyFrameMinDepthPoints = 100;   // a keyframe adds depth points up to at least this many
 constexpr double kRgbdLeavingMapRatio = 0.25;     // ORB-SLAM2's RGB-D c1c: tracked < 25 % of the reference's
 constexpr int kInitMinMatches = 100;
+constexpr int kMinStaticMatchesForPose = 20;  // fewer: objects that may move help the pose after all
 constexpr double kInitWindowPx = 100.0;
 constexpr double kProjectionRadiusPx = 15.0;  // monocular search window around the predicted position
 constexpr size_t kMaxLocalKeyFrames = 80;
@@ -370,9 +372,17 @@ int Tracking::optimisePose(Frame& frame) {
   std::vector<Vec3> points_w;
   std::vector<Observation2D> observations;
   std::vector<int> keypoint_of;
+  // Keypoints on objects that may move are left out while the static scene
+  // alone can give the pose (checkObjectMotion judges them afterwards).
+  const bool has_labels = frame.labels.size() == frame.size();
+  int static_matches = 0;
+  for (size_t i = 0; i < frame.size(); ++i)
+    if (frame.map_points[i] && (!has_labels || drivesPose(frame.labels[i]))) ++static_matches;
+  const bool static_only = static_matches >= kMinStaticMatchesForPose;
   for (size_t i = 0; i < frame.size(); ++i) {
     MapPoint* point = frame.map_points[i];
     if (!point) continue;
+    if (has_labels && (onMovingObject(frame.labels[i]) || (static_only && !drivesPose(frame.labels[i])))) continue;
     keypoint_of.push_back(static_cast<int>(i));
     // Keypoints with depth add the right coordinate: (u, v, u_R), 3-DOF chi-square.
     observations.push_back({static_cast<int>(points_w.size()), frame.point(i),
@@ -380,6 +390,11 @@ int Tracking::optimisePose(Frame& frame) {
     points_w.push_back(point->position());
   }
   frame.outlier.assign(frame.size(), false);
+  // Matches left out of the pose are not outliers of it; those on moving
+  // objects are dropped (discardOutliers), the undecided ones kept for the check.
+  if (has_labels)
+    for (size_t i = 0; i < frame.size(); ++i)
+      if (frame.map_points[i] && onMovingObject(frame.labels[i])) frame.outlier[i] = true;
   if (observations.size() < 3) return 0;
   const PoseOptimizationResult result =
       optimizePose(*frame.camera, frame.camera->bf, frame.T_cw, points_w, observations);
@@ -565,6 +580,7 @@ bool Tracking::trackLocalMap(Frame& frame) {
     searchLocalPoints(frame, local_points_, just_relocalised ? 5.0 : 1.0);
   }
   optimisePose(frame);
+  if (frame.labels.size() == frame.size() && checkMovingObjects(frame)) optimisePose(frame);
 
   matches_inliers_ = 0;
   for (size_t i = 0; i < frame.size(); ++i) {
@@ -577,6 +593,37 @@ bool Tracking::trackLocalMap(Frame& frame) {
       last_relocalisation_frame_id_ >= 0 &&
       frame.id < last_relocalisation_frame_id_ + config_.tracking.max_frames_between_keyframes;
   return matches_inliers_ >= (recently_relocalised ? 50 : config_.tracking.min_inliers);
+}
+
+bool Tracking::checkMovingObjects(Frame& frame) {
+  bool any_parked = false;
+  std::vector<bool> consistent;
+  for (const ObjectMotionVerdict& verdict : checkObjectMotion(frame, &consistent)) {
+    ++moving_object_stats_.boxes_checked;
+    if (verdict.motion == ObjectMotion::Parked) {
+      ++moving_object_stats_.parked;
+      any_parked = true;
+    } else if (verdict.motion == ObjectMotion::Moving) {
+      ++moving_object_stats_.moving;
+    } else {
+      ++moving_object_stats_.undecided;
+    }
+  }
+  // A moving instance's map points were made while it stood still (or on an
+  // earlier, wrong verdict): the object has moved on, so they are retired.
+  // Matches that agree with the pose (the static scene seen past the object)
+  // are only let go.
+  for (size_t i = 0; i < frame.size(); ++i) {
+    MapPoint* point = frame.map_points[i];
+    if (!point || !onMovingObject(frame.labels[i])) continue;
+    frame.map_points[i] = nullptr;
+    frame.outlier[i] = false;
+    if (!consistent[i] && !point->isBad() && point->observationCount() > 0) {
+      point->setBad();
+      ++moving_object_stats_.points_retired;
+    }
+  }
+  return any_parked;  // its points join the pose
 }
 
 bool Tracking::needNewKeyFrame(const Frame& frame) const {
@@ -634,8 +681,14 @@ void Tracking::addCloseDepthPoints(KeyFrame* keyframe, Frame& frame) {
   // point becomes one, until past the close depth with at least 100 points
   // counted (tracked ones included).
   std::vector<std::pair<float, size_t>> by_depth;
+  // Not on objects that may move: a box judged parked from the static scene
+  // behind it still holds the walking person's own pixels, and a point made
+  // from depth is trusted at once. Parked objects get their points by
+  // triangulation, which needs them to hold still between keyframes.
+  const bool has_labels = keyframe->labels.size() == keyframe->size();
   for (size_t i = 0; i < keyframe->size(); ++i)
-    if (keyframe->hasDepth(i)) by_depth.emplace_back(keyframe->depth[i], i);
+    if (keyframe->hasDepth(i) && !(has_labels && keyframe->labels[i].motion != ObjectMotion::NotMovable))
+      by_depth.emplace_back(keyframe->depth[i], i);
   std::sort(by_depth.begin(), by_depth.end());
   const double close_depth = keyframe->camera().closeDepth();
   int counted = 0, created = 0;

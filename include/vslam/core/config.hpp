@@ -78,6 +78,10 @@ struct DetectorParams {
   int box_features = 250;
   std::string dnn_target = "cpu";  // cpu | opencl | cuda
   std::vector<std::string> dynamic_classes;  // keypoints in these boxes are removed
+  // Boxes of these classes are checked for motion each frame instead: a moving
+  // instance's keypoints and map points are kept out of tracking and mapping,
+  // a parked one stays. "coco-movable" stands for COCO's movable classes.
+  std::vector<std::string> moving_classes;
 };
 
 // What the run feeds the pipeline: colour alone, or colour with registered

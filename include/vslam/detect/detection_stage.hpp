@@ -27,12 +27,14 @@ class DetectionStage {
   const ModelFiles& files() const { return detector_->files(); }
   const std::vector<std::string>& classNames() const { return detector_->classNames(); }
   const std::vector<int>& dynamicClassIds() const { return dynamic_class_ids_; }
+  const std::vector<int>& movingClassIds() const { return moving_class_ids_; }
   double totalWaitMs() const { return async_->totalWaitMs(); }  // Tracking's time blocked on detection
 
  private:
   DetectorParams params_;
   std::unique_ptr<YoloDetector> detector_;
   std::vector<int> dynamic_class_ids_;
+  std::vector<int> moving_class_ids_;
   std::unique_ptr<AsyncDetector> async_;  // last: its thread uses detector_, so it stops first
 };
 

@@ -22,7 +22,10 @@ struct FrameFilterResult {
 class FrameBuilder {
  public:
   // `dynamic_class_ids`: classes whose boxes remove keypoints (DetectionStage::dynamicClassIds()).
-  FrameBuilder(const Config& config, const PinholeCamera& camera, std::vector<int> dynamic_class_ids = {});
+  // Keypoints in boxes of `dynamic_class_ids` are removed; those in boxes of
+  // `moving_class_ids` are kept and labelled for the motion check.
+  FrameBuilder(const Config& config, const PinholeCamera& camera, std::vector<int> dynamic_class_ids = {},
+               std::vector<int> moving_class_ids = {});
 
   // `bgr` is the colour image (or grey, CV_8UC1); `depth_m` is CV_32F metres,
   // registered to it and of its size, or empty (no depth: a monocular frame;
@@ -48,6 +51,7 @@ class FrameBuilder {
   ScalePyramid pyramid_;
   cv::Rect2f undistorted_bounds_;
   std::vector<int> dynamic_class_ids_;
+  std::vector<int> moving_class_ids_;
 };
 
 }  // namespace vslam

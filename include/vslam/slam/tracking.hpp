@@ -67,6 +67,15 @@ class Tracking {
     database_ = database;
   }
   int relocalisations() const { return relocalisations_; }
+  // What the motion check of --moving-classes boxes found, over the run.
+  struct MovingObjectStats {
+    int boxes_checked = 0;  // box-frames judged or left undecided
+    int moving = 0;
+    int parked = 0;
+    int undecided = 0;       // too few matched points to judge
+    int points_retired = 0;  // map points on instances found moving
+  };
+  const MovingObjectStats& movingObjectStats() const { return moving_object_stats_; }
   // A map reset (lost right after initialisation) also resets Loop Closing.
   void setLoopClosing(LoopClosing* loop_closing) { loop_closing_ = loop_closing; }
   int mapResets() const { return map_resets_; }
@@ -109,6 +118,9 @@ class Tracking {
   int optimisePose(Frame& frame);  // returns inliers, removes outlier matches' effects
   void updateLocalMap(Frame& frame);
   bool needNewKeyFrame(const Frame& frame) const;
+  // Judges the frame's movable-class boxes under its pose, drops and retires
+  // what is on moving ones; true when a parked one's points should join the pose.
+  bool checkMovingObjects(Frame& frame);
   void createKeyFrame(Frame& frame);
   void resetMap();
   // The last frame's pose again from its reference keyframe (following culled
@@ -142,6 +154,7 @@ class Tracking {
   const Vocabulary* vocabulary_ = nullptr;
   const KeyframeDatabase* database_ = nullptr;
   int relocalisations_ = 0;
+  MovingObjectStats moving_object_stats_;
   int map_resets_ = 0;
   int keyframe_waits_ = 0;
   int motion_model_misses_ = 0;

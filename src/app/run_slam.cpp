@@ -308,6 +308,7 @@ struct RunOutcome {
   int frames_dropped = 0;             // --realtime: arrived while Tracking was busy
   std::vector<SkippedFrame> skipped;  // unreadable frames, left out
   std::vector<double> tracked_points;  // map points tracked in each tracked frame
+  std::vector<double> inlier_ratios;   // of those, tracked / matched before outlier rejection
   bool final_ba = false;              // a final BA result was merged
   double wall_s = 0;
 
@@ -357,8 +358,11 @@ void runFrameLoop(System& system, const Sequence& sequence, size_t begin, size_t
       if (!options.realtime && have_ahead && !ahead.unreadable && ahead.error.empty())
         system.submitAhead(sequence.frames[ahead.position].index, ahead.image);
       const FrameEntry& entry = sequence.frames[loaded.position];
-      if (system.processFrame(entry.index, entry.timestamp, loaded.image, loaded.depth))
+      if (system.processFrame(entry.index, entry.timestamp, loaded.image, loaded.depth)) {
         outcome.tracked_points.push_back(system.lastTrackedPoints());
+        if (system.lastMatchedPoints() > 0)
+          outcome.inlier_ratios.push_back(static_cast<double>(system.lastTrackedPoints()) / system.lastMatchedPoints());
+      }
     }
     loaded = std::move(ahead);
     have_loaded = have_ahead;
@@ -721,6 +725,7 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   report["detector"] = detectorJson(system.detectionSummary());
   report["objects"] = static_cast<int>(objects.size());
   report["tracked_points_per_frame"] = percentile(outcome.tracked_points, 0.5);  // median over tracked frames
+  report["inlier_ratio_per_frame"] = percentile(outcome.inlier_ratios, 0.5);
   report["wall_s"] = outcome.wall_s;
   report["fps"] = outcome.wall_s > 0 ? stats.frames / outcome.wall_s : 0.0;
   report["peak_rss_mb"] = peakRssMb();

@@ -324,5 +324,6 @@ std::pair<int, int> System::loadMap(const std::string& path, bool localize) {
 }
 
 int System::lastTrackedPoints() const { return tracking_->lastTrackedPoints(); }
+int System::lastMatchedPoints() const { return tracking_->lastMatchedPoints(); }
 
 }  // namespace vslam

@@ -160,6 +160,7 @@ bool Tracking::track(Frame& frame) {
   }
 
   last_tracked_points_ = ok ? matches_inliers_ : 0;
+  last_matched_points_ = ok ? local_map_matches_ : 0;
   if (ok && reference_keyframe_) {
     record.tracked = true;
     record.reference = reference_keyframe_;
@@ -579,6 +580,8 @@ bool Tracking::trackLocalMap(Frame& frame) {
     const bool just_relocalised = last_relocalisation_frame_id_ >= 0 && frame.id < last_relocalisation_frame_id_ + 2;
     searchLocalPoints(frame, local_points_, just_relocalised ? 5.0 : 1.0);
   }
+  local_map_matches_ = static_cast<int>(std::count_if(frame.map_points.begin(), frame.map_points.end(),
+                                                      [](const MapPoint* point) { return point != nullptr; }));
   optimisePose(frame);
   if (frame.labels.size() == frame.size() && checkMovingObjects(frame)) optimisePose(frame);
 

@@ -148,6 +148,7 @@ class System {
   // keyframe is made, nothing in the map changes and no final BA runs,
   // otherwise mapping continues in it. Returns the keyframes and points loaded.
   std::pair<int, int> loadMap(const std::string& path, bool localize);
+  int lastMatchedPoints() const;  // before the pose optimisation's outlier rejection
   StageTimer& timer() { return timer_; }
   // Loop Closing's bookkeeping (empty state without it); waits for the keyframe in hand.
   LoopClosingState loopClosingState() const;

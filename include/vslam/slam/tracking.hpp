@@ -100,6 +100,9 @@ class Tracking {
   int initialisedAtIndex() const { return initialised_at_index_; }
   int keyframesCreated() const { return keyframes_created_; }
   int lastTrackedPoints() const { return last_tracked_points_; }
+  // Map points matched in the last frame's local-map search, before the pose
+  // optimisation rejected outliers (0 when it was not tracked).
+  int lastMatchedPoints() const { return last_matched_points_; }
 
  private:
   void initialise(Frame& frame);
@@ -148,6 +151,8 @@ class Tracking {
   std::vector<MapPoint*> local_points_;
   int matches_inliers_ = 0;
   int last_tracked_points_ = 0;
+  int local_map_matches_ = 0;  // matches the last trackLocalMap optimised the pose on
+  int last_matched_points_ = 0;
   int initialised_at_index_ = -1;
   int keyframes_created_ = 0;
   std::vector<FrameRecord> records_;

@@ -135,10 +135,17 @@ TEST(DetectionStage, ResolvesDynamicClassesAndDetectsAhead) {
   EXPECT_EQ(stage->dynamicClassIds(), (std::vector<int>{0, 56}));
   EXPECT_EQ(stage->classNames().size(), 80u);
   const cv::Mat dog = cv::imread((test::sharedData() / "images/dog.jpg").string());
-  stage->submit(0, dog);
-  stage->submit(1, dog);
-  EXPECT_EQ(stage->wait(0).size(), 3u);
-  EXPECT_EQ(stage->wait(1).size(), 3u);
+  // Every frame (the default): both submitted ahead, each frame gets its own three boxes, fresh.
+  stage->submitAhead(0, dog);
+  stage->submitAhead(1, dog);
+  FeatureSnapshot frame;
+  frame.frame_index = 0;
+  EXPECT_EQ(stage->boxesFor(frame, dog).size(), 3u);
+  frame.frame_index = 1;
+  EXPECT_EQ(stage->boxesFor(frame, dog).size(), 3u);
+  EXPECT_EQ(stage->scheduleStats().network_frames, 2);
+  EXPECT_EQ(stage->scheduleStats().fresh_frames, 2);
+  EXPECT_EQ(stage->scheduleStats().ages, (std::vector<int>(6, 0)));
 
   params.dynamic_classes = {"pedestrian"};
   try {

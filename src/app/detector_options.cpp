@@ -24,9 +24,9 @@ void addDetectorOptions(CLI::App& command, DetectorOptions& options) {
   command.add_option("--detect-every", options.detect_every,
                      "Frames the network sees: N (every N-th frame; 1 = every frame, the paper), 'keyframes' or 'auto' "
                      "(whenever the detection thread is free, never waited for); boxes are carried in between");
-  command.add_option("--max-box-age", options.max_box_age, "Frames a carried box lives after its detection (default 15)");
+  command.add_option("--max-box-age", options.max_box_age, "Frames a carried box lives after its detection (default 30)");
   command.add_option("--dnn-threads", options.dnn_threads,
-                     "OpenCV threads while a detector is loaded (cv::setNumThreads); 0: OpenCV's default");
+                     "OpenCV threads while a detector is loaded (cv::setNumThreads; default 1); 0: OpenCV's default");
   command.add_option("--box-filter", options.box_filter,
                      "paper: ORB again inside each box (Algorithm 1); reuse: only the frame's own FAST corners its "
                      "quota dropped");

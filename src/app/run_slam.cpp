@@ -295,7 +295,8 @@ nlohmann::json detectorJson(const DetectionSummary& summary) {
           {"box_age_median", summary.box_age_median},
           {"boxes_expired", summary.boxes_expired},
           {"boxes_unmoved", summary.boxes_unmoved},
-          {"frame_keypoints_reused_total", summary.frame_keypoints_reused_total}};
+          {"frame_keypoints_reused_total", summary.frame_keypoints_reused_total},
+          {"duplicates_dropped_total", summary.duplicates_dropped_total}};
 }
 
 enum class RunStatus { Completed, Interrupted, Failed };

@@ -102,6 +102,7 @@ bool System::processFrame(int index, double timestamp, const cv::Mat& image, con
   if (detection_) {
     timer_.record("filter", filter.ms);
     keypoints_reused_.push_back(filter.frame_keypoints_reused);
+    duplicates_dropped_.push_back(filter.stats.duplicates_dropped);
     keypoints_added_.push_back(filter.stats.keypoints_added);
     keypoints_removed_.push_back(filter.stats.keypoints_removed_dynamic);
     boxes_used_.push_back(filter.stats.boxes_used);
@@ -241,6 +242,7 @@ DetectionSummary System::detectionSummary() const {
   summary.boxes_expired = schedule.expired;
   summary.boxes_unmoved = schedule.unmoved;
   for (int reused : keypoints_reused_) summary.frame_keypoints_reused_total += reused;
+  for (int dropped : duplicates_dropped_) summary.duplicates_dropped_total += dropped;
   summary.keypoints_added_per_frame = median(keypoints_added_);
   summary.keypoints_removed_per_frame = median(keypoints_removed_);
   summary.boxes_used_per_frame = median(boxes_used_);

@@ -97,10 +97,14 @@ struct DetectorParams {
   std::vector<std::string> dynamic_classes;  // keypoints in these boxes are removed
   DetectEvery detect_every;  // config key detector.detect_every: 1, N, keyframes or auto
   // Frames a box lives after the network saw it; older carried boxes expire.
-  int max_box_age = 15;
+  // 30 (1 s at 30 Hz) outlives fr1_xyz's keyframe spacing (~19 frames), so
+  // --detect-every keyframes still labels the next keyframe.
+  int max_box_age = 30;
   // OpenCV's worker threads (cv::setNumThreads, process-wide) once a detector
-  // is loaded; 0 leaves OpenCV's default (one per core).
-  int dnn_threads = 0;
+  // is loaded; 0 leaves OpenCV's default (one per core). 1 measured faster on
+  // 2 shared cores: the network's second thread only took a core from
+  // Tracking and Local Mapping (docs/BENCHMARKS.md, "Detection rate").
+  int dnn_threads = 1;
   // How boxes add keypoints: "paper" runs ORB again inside each box (Algorithm
   // 1); "reuse" takes the frame's own FAST corners and describes only the ones
   // the frame's quota dropped (issue 15).

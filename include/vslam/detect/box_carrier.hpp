@@ -37,7 +37,7 @@ struct CarriedBox {
 };
 
 struct BoxCarrierParams {
-  int max_age = 15;                 // older boxes expire
+  int max_age = 30;                 // older boxes expire
   float search_radius_px = 24.f;    // window per frame of gap, at level 0 (scaled by the keypoint's level)
   float max_search_radius_px = 96.f;
   int max_hamming = 50;             // ORB-SLAM's TH_LOW

@@ -101,6 +101,7 @@ struct DetectionSummary {
   int boxes_expired = 0;      // carried boxes dropped for age
   int boxes_unmoved = 0;      // carried boxes dropped for too few matches to move them
   long frame_keypoints_reused_total = 0;  // "reuse": box winners that were frame keypoints already
+  long duplicates_dropped_total = 0;      // "paper": box keypoints extracted again and dropped as the frame's own
 };
 
 class System {
@@ -164,7 +165,7 @@ class System {
   int frames_without_depth_ = 0;
   bool finished_ = false;
   // Keypoint filter outcome per frame (Tracking's thread only).
-  std::vector<int> keypoints_added_, keypoints_removed_, boxes_used_, keypoints_reused_;
+  std::vector<int> keypoints_added_, keypoints_removed_, boxes_used_, keypoints_reused_, duplicates_dropped_;
 };
 
 }  // namespace vslam

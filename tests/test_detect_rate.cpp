@@ -55,6 +55,10 @@ TEST(DetectRate, EveryFourthFrameRunsTheNetworkOnThoseFramesOnly) {
   EXPECT_EQ(detector["fresh_frames"].get<int>() + detector["carried_frames"].get<int>(), 30);
   EXPECT_LE(detector["fresh_frames"].get<int>(), 8);
   EXPECT_GT(detector["keypoints_added_total"].get<int>(), 0);
+  // Measured on the 7 detected frames after the first: carried boxes against fresh ones.
+  ASSERT_TRUE(detector["carried_iou_median"].is_number()) << detector.dump();
+  EXPECT_GE(detector["carried_iou_median"].get<double>(), 0.0);
+  EXPECT_LE(detector["carried_iou_median"].get<double>(), 1.0);
   EXPECT_TRUE(test::contains(outcome.out, "detect every 4: network on 8 frames")) << outcome.out;
 }
 

@@ -277,26 +277,31 @@ void writeObjectsJson(const std::string& path, const std::vector<ObjectLandmark>
 
 nlohmann::json detectorJson(const DetectionSummary& summary) {
   if (!summary.enabled) return {{"model", "none"}};
-  return {{"model", summary.model},
-          {"cfg", summary.cfg},
-          {"input_size", summary.input_size},
-          {"median_ms", summary.median_ms},
-          {"wait_median_ms", summary.wait_median_ms},
-          {"keypoints_added_per_frame", summary.keypoints_added_per_frame},
-          {"keypoints_added_total", summary.keypoints_added_total},
-          {"keypoints_removed_per_frame", summary.keypoints_removed_per_frame},
-          {"boxes_used_per_frame", summary.boxes_used_per_frame},
-          {"frames", summary.frames},
-          {"detect_every", summary.detect_every},
-          {"box_filter", summary.box_filter},
-          {"network_frames", summary.network_frames},
-          {"fresh_frames", summary.fresh_frames},
-          {"carried_frames", summary.carried_frames},
-          {"box_age_median", summary.box_age_median},
-          {"boxes_expired", summary.boxes_expired},
-          {"boxes_unmoved", summary.boxes_unmoved},
-          {"frame_keypoints_reused_total", summary.frame_keypoints_reused_total},
-          {"duplicates_dropped_total", summary.duplicates_dropped_total}};
+  nlohmann::json json = {{"model", summary.model},
+                         {"cfg", summary.cfg},
+                         {"input_size", summary.input_size},
+                         {"median_ms", summary.median_ms},
+                         {"wait_median_ms", summary.wait_median_ms},
+                         {"keypoints_added_per_frame", summary.keypoints_added_per_frame},
+                         {"keypoints_added_total", summary.keypoints_added_total},
+                         {"keypoints_removed_per_frame", summary.keypoints_removed_per_frame},
+                         {"boxes_used_per_frame", summary.boxes_used_per_frame},
+                         {"frames", summary.frames},
+                         {"detect_every", summary.detect_every},
+                         {"box_filter", summary.box_filter},
+                         {"network_frames", summary.network_frames},
+                         {"fresh_frames", summary.fresh_frames},
+                         {"carried_frames", summary.carried_frames},
+                         {"box_age_median", summary.box_age_median},
+                         {"carried_iou_median",
+                          summary.carried_iou_median < 0 ? nlohmann::json() : nlohmann::json(summary.carried_iou_median)},
+                         {"boxes_expired", summary.boxes_expired},
+                         {"boxes_unmoved", summary.boxes_unmoved},
+                         {"frame_keypoints_reused_total", summary.frame_keypoints_reused_total},
+                         {"duplicates_dropped_total", summary.duplicates_dropped_total}};
+  if (summary.carried_iou_median < 0)
+    json["carried_iou_unavailable"] = "measured only with --detect-every N, N > 1, on the frames the network sees";
+  return json;
 }
 
 enum class RunStatus { Completed, Interrupted, Failed };

@@ -1,5 +1,7 @@
 #include "vslam/detect/detection_stage.hpp"
 
+#include <algorithm>
+
 #include <opencv2/core/utility.hpp>
 #include <spdlog/spdlog.h>
 
@@ -53,8 +55,20 @@ std::vector<Detection> DetectionStage::boxesFor(const FeatureSnapshot& frame, co
     if (isTurn(frame.frame_index)) {
       if (!async_->pending(frame.frame_index)) async_->submit(frame.frame_index, bgr);
       const std::vector<Detection> detections = async_->wait(frame.frame_index);
-      carrier_.clear();  // the frame's own boxes replace the carried ones: no need to carry those
-      carrier_.advance(frame);
+      if (params_.detect_every.frames > 1) {
+        // Carry the old boxes here too, only to measure them against the new ones.
+        carrier_.advance(frame);
+        for (const Detection& fresh : detections) {
+          double best = 0.0;
+          for (const CarriedBox& carried : carrier_.boxes())
+            if (carried.detection.class_id == fresh.class_id)
+              best = std::max(best, static_cast<double>(iou(carried.detection.box, fresh.box)));
+          stats_.carried_iou.push_back(best);
+        }
+      } else {
+        carrier_.clear();  // every frame is detected: nothing to carry
+        carrier_.advance(frame);
+      }
       carrier_.replace(detections, frame);
       ++stats_.network_frames;
     } else {

@@ -239,6 +239,7 @@ DetectionSummary System::detectionSummary() const {
   summary.fresh_frames = schedule.fresh_frames;
   summary.carried_frames = schedule.carried_frames;
   summary.box_age_median = percentile(std::vector<double>(schedule.ages.begin(), schedule.ages.end()), 0.5);
+  if (!schedule.carried_iou.empty()) summary.carried_iou_median = percentile(schedule.carried_iou, 0.5);
   summary.boxes_expired = schedule.expired;
   summary.boxes_unmoved = schedule.unmoved;
   for (int reused : keypoints_reused_) summary.frame_keypoints_reused_total += reused;

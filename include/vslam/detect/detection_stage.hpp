@@ -35,6 +35,9 @@ struct DetectionScheduleStats {
   int carried_frames = 0;   // frames whose boxes were carried (age > 0) or empty
   std::vector<int> ages;    // age of every box handed to the filter
   int expired = 0, unmoved = 0;
+  // Every N-th frame with N > 1: on each detected frame, per fresh detection the
+  // best IoU with a carried box of its class (0 when none): how well carrying held.
+  std::vector<double> carried_iou;
 };
 
 class DetectionStage {

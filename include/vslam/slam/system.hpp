@@ -98,6 +98,7 @@ struct DetectionSummary {
   int fresh_frames = 0;       // frames with a box of their own detection
   int carried_frames = 0;     // frames with only carried boxes, or none
   double box_age_median = 0.0;  // frames, over every box handed to the filter
+  double carried_iou_median = -1.0;  // every N-th frame, N > 1: carried box against the fresh one (-1: none)
   int boxes_expired = 0;      // carried boxes dropped for age
   int boxes_unmoved = 0;      // carried boxes dropped for too few matches to move them
   long frame_keypoints_reused_total = 0;  // "reuse": box winners that were frame keypoints already

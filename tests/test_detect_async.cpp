@@ -9,6 +9,7 @@
 #include <thread>
 
 #include <gtest/gtest.h>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "test_support.hpp"
@@ -153,6 +154,24 @@ TEST(DetectionStage, ResolvesDynamicClassesAndDetectsAhead) {
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("pedestrian"), std::string::npos) << e.what();
+  }
+}
+
+// The thread budget holds while a detector is loaded and is lifted with it.
+TEST(DetectionStage, ThreadBudgetHoldsWhileTheStageLives) {
+  const int before = cv::getNumThreads();
+  DetectorParams params;
+  params.dnn_threads = 1;
+  {
+    const auto stage = makeDetectionStage(params);
+    ASSERT_NE(stage, nullptr);
+    EXPECT_EQ(cv::getNumThreads(), 1);
+  }
+  EXPECT_EQ(cv::getNumThreads(), before);
+  params.dnn_threads = 0;  // OpenCV's own count, untouched
+  {
+    const auto stage = makeDetectionStage(params);
+    EXPECT_EQ(cv::getNumThreads(), before);
   }
 }
 

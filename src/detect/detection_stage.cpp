@@ -1,9 +1,11 @@
 #include "vslam/detect/detection_stage.hpp"
 
 #include <algorithm>
+#include <iterator>
+#include <optional>
+#include <utility>
 
 #include <opencv2/core/utility.hpp>
-#include <spdlog/spdlog.h>
 
 #include "vslam/detect/model_locator.hpp"
 
@@ -25,14 +27,23 @@ DetectionStage::DetectionStage(const DetectorParams& params, StageTimer* timer, 
       carrier_(carrierParams(params)) {
   dynamic_class_ids_ = classIdsOf(params_.dynamic_classes, detector_->classNames(), detector_->files().names);
   // OpenCV has one thread pool for the process (TBB in Debian's build): the
-  // budget holds for the network and for Tracking's resizes and blurs alike.
-  if (params_.dnn_threads > 0) cv::setNumThreads(params_.dnn_threads);
+  // budget holds for the network and for Tracking's resizes and blurs alike,
+  // until this stage is gone.
+  if (params_.dnn_threads > 0) {
+    opencv_threads_before_ = cv::getNumThreads();
+    cv::setNumThreads(params_.dnn_threads);
+  }
   YoloDetector* detector = detector_.get();
   async_ = std::make_unique<AsyncDetector>([detector, timer](const cv::Mat& bgr) {
     std::vector<Detection> detections = detector->detect(bgr);
     if (timer) timer->record("detect", detector->lastMs());
     return detections;
   });
+}
+
+DetectionStage::~DetectionStage() {
+  async_.reset();  // the network's thread stops before the budget is lifted
+  if (opencv_threads_before_ >= 0) cv::setNumThreads(opencv_threads_before_);
 }
 
 bool DetectionStage::isTurn(int frame_index) const {

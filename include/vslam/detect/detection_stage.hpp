@@ -48,6 +48,10 @@ class DetectionStage {
   // `deterministic`: keyframes/auto results are waited for at the next frame
   // (and auto behaves as keyframes), so a run does not depend on timing.
   DetectionStage(const DetectorParams& params, StageTimer* timer = nullptr, bool deterministic = false);
+  // Gives OpenCV back the thread count it had before (params.dnn_threads).
+  ~DetectionStage();
+  DetectionStage(const DetectionStage&) = delete;
+  DetectionStage& operator=(const DetectionStage&) = delete;
 
   // Frames mode: starts detection of the frame `boxesFor` gets next when the
   // network is to see it. Does nothing otherwise or when already submitted.
@@ -79,6 +83,7 @@ class DetectionStage {
   BoxCarrier carrier_;
   std::map<int, FeatureSnapshot> submitted_;  // keyframes/auto: frames sent to the network, by index
   DetectionScheduleStats stats_;
+  int opencv_threads_before_ = -1;  // -1: the thread count was left alone
   std::unique_ptr<AsyncDetector> async_;  // last: its thread uses detector_, so it stops first
 };
 

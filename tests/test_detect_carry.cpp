@@ -197,6 +197,7 @@ TEST(ReuseFilter, AddsOnlyCornersTheFrameDroppedWithTheirOwnDescriptors) {
   std::vector<cv::KeyPoint> added;
   cv::Mat added_descriptors;
   int reused = 0;
+  const OrbCorners frame_corners = corners;  // the frame's as extracted, for the filter below
   extractor.extractFromCorners(pyramid, corners, box, 250, added, added_descriptors, &reused);
   ASSERT_FALSE(added.empty());
   EXPECT_EQ(added_descriptors.rows, static_cast<int>(added.size()));
@@ -231,13 +232,52 @@ TEST(ReuseFilter, AddsOnlyCornersTheFrameDroppedWithTheirOwnDescriptors) {
   int filter_reused = 0;
   std::vector<cv::KeyPoint> keypoints = frame_keypoints;
   cv::Mat descriptors = frame_descriptors.clone();
-  const KeypointFilterStats stats =
-      applyKeypointFilter(image.size(), {dog}, 64, {}, cornerBoxExtractor(extractor, pyramid, corners, 250, &filter_reused),
-                          keypoints, descriptors, labels);
+  OrbCorners filter_corners = frame_corners;
+  const KeypointFilterStats stats = applyKeypointFilter(
+      image.size(), {dog}, 64, {}, cornerBoxExtractor(extractor, pyramid, filter_corners, 250, &filter_reused),
+      keypoints, descriptors, labels);
   EXPECT_EQ(stats.duplicates_dropped, 0);
   EXPECT_EQ(stats.keypoints_added, static_cast<int>(added.size()));
   EXPECT_EQ(filter_reused, reused);
   EXPECT_EQ(keypoints.size(), frame_keypoints.size() + added.size());
+  // The same box again adds nothing: its winners are all the frame's now.
+  std::vector<cv::KeyPoint> again;
+  cv::Mat again_descriptors;
+  int again_reused = 0;
+  extractor.extractFromCorners(pyramid, corners, box, 250, again, again_descriptors, &again_reused);
+  EXPECT_TRUE(again.empty());
+  EXPECT_EQ(again_reused, reused + static_cast<int>(added.size()));
+}
+
+// Two overlapping boxes: a new corner that wins in both is described once,
+// so the filter drops nothing as a duplicate (it dropped 25 a frame on
+// fr1_xyz before corners were marked as taken between boxes).
+TEST(ReuseFilter, OverlappingBoxesDoNotAddTheSameCornerTwice) {
+  const cv::Mat image = cv::imread((test::sharedData() / "images/dog.jpg").string(), cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(image.empty());
+  const OrbExtractor extractor(OrbParams{});
+  const ImagePyramid pyramid = extractor.buildPyramid(image);
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;
+  OrbCorners corners;
+  extractor.extract(pyramid, keypoints, descriptors, cv::Rect(), -1, &corners);
+  const size_t frame_count = keypoints.size();
+  std::vector<Detection> boxes(2);
+  boxes[0].id = 0, boxes[0].class_id = 16, boxes[0].box = cv::Rect2f(120, 200, 300, 220);
+  boxes[1].id = 1, boxes[1].class_id = 1, boxes[1].box = cv::Rect2f(200, 150, 300, 220);
+  std::vector<KeypointLabel> labels;
+  int reused = 0;
+  const KeypointFilterStats stats =
+      applyKeypointFilter(image.size(), boxes, 64, {}, cornerBoxExtractor(extractor, pyramid, corners, 250, &reused),
+                          keypoints, descriptors, labels);
+  EXPECT_EQ(stats.boxes_used, 2);
+  EXPECT_GT(stats.keypoints_added, 0);
+  EXPECT_EQ(stats.duplicates_dropped, 0);
+  EXPECT_EQ(keypoints.size(), frame_count + static_cast<size_t>(stats.keypoints_added));
+  using Key = std::tuple<float, float, int>;
+  std::set<Key> unique;
+  for (const cv::KeyPoint& kp : keypoints) unique.insert({kp.pt.x, kp.pt.y, kp.octave});
+  EXPECT_EQ(unique.size(), keypoints.size());
 }
 
 }  // namespace

@@ -130,7 +130,7 @@ BoxExtractor orbBoxExtractor(const OrbExtractor& extractor, const ImagePyramid& 
   };
 }
 
-BoxExtractor cornerBoxExtractor(const OrbExtractor& extractor, const ImagePyramid& pyramid, const OrbCorners& corners,
+BoxExtractor cornerBoxExtractor(const OrbExtractor& extractor, const ImagePyramid& pyramid, OrbCorners& corners,
                                 int features_per_box, int* frame_winners) {
   return [&extractor, &pyramid, &corners, features_per_box, frame_winners](
              const cv::Rect& box, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) {

@@ -420,7 +420,7 @@ void OrbExtractor::extract(const ImagePyramid& pyramid, std::vector<cv::KeyPoint
   describe(pyramid, kept, keypoints, descriptors);
 }
 
-void OrbExtractor::extractFromCorners(const ImagePyramid& pyramid, const OrbCorners& corners, const cv::Rect& roi,
+void OrbExtractor::extractFromCorners(const ImagePyramid& pyramid, OrbCorners& corners, const cv::Rect& roi,
                                       int n_features, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors,
                                       int* frame_winners) const {
   keypoints.clear();
@@ -436,6 +436,7 @@ void OrbExtractor::extractFromCorners(const ImagePyramid& pyramid, const OrbCorn
 
   std::vector<Corner> added;
   std::vector<Corner> candidates;
+  std::vector<int> candidate_index;  // into corners.levels[l]
   int carried = 0;
   for (int l = 0; l < params_.n_levels; ++l) {
     const cv::Rect region = levelRegion(pyramid, l, area);
@@ -448,12 +449,15 @@ void OrbExtractor::extractFromCorners(const ImagePyramid& pyramid, const OrbCorn
     // quadtree then sees what a FAST run over the ROI would have found with
     // the frame's cells (it does not re-run FAST in cells empty at ROI scale).
     candidates.clear();
-    for (const Corner& corner : corners.levels[l]) {
+    candidate_index.clear();
+    for (int i = 0; i < static_cast<int>(corners.levels[l].size()); ++i) {
+      const Corner& corner = corners.levels[l][i];
       const cv::Point2f& p0 = corner.level0;
       if (p0.x < area.x || p0.y < area.y || p0.x >= area.x + area.width || p0.y >= area.y + area.height) continue;
       if (!region.contains(cv::Point(static_cast<int>(corner.keypoint.pt.x), static_cast<int>(corner.keypoint.pt.y))))
         continue;
       candidates.push_back(corner);
+      candidate_index.push_back(i);
     }
     const std::vector<int> selected = distributeQuadtree(candidates, cv::Rect2f(region), quota);
     for (int index : selected) {
@@ -463,6 +467,7 @@ void OrbExtractor::extractFromCorners(const ImagePyramid& pyramid, const OrbCorn
       }
       added.push_back(candidates[index]);
       orient(pyramid, l, added.back());
+      corners.levels[l][candidate_index[index]].in_frame = true;
     }
     carried = quota - static_cast<int>(selected.size());
   }

@@ -70,7 +70,8 @@ BoxExtractor orbBoxExtractor(const OrbExtractor& extractor, const ImagePyramid& 
 // only keypoints that are new. `frame_winners` (when given) accumulates the box
 // winners that were frame keypoints already. Everything passed must outlive
 // the returned function.
-BoxExtractor cornerBoxExtractor(const OrbExtractor& extractor, const ImagePyramid& pyramid, const OrbCorners& corners,
+// `corners` is updated as boxes add keypoints (see extractFromCorners).
+BoxExtractor cornerBoxExtractor(const OrbExtractor& extractor, const ImagePyramid& pyramid, OrbCorners& corners,
                                 int features_per_box, int* frame_winners = nullptr);
 
 // Features to ask for in each box: DetectorParams::box_features, or the

@@ -78,9 +78,11 @@ class OrbExtractor {
   // Extraction inside `roi` from the corners a whole-frame extract() kept: the
   // same level quotas and quadtree as extract(roi, n_features), but no FAST
   // run, and orientation and descriptor only for the winners the frame did not
-  // already have. Those are returned; `frame_winners` (when given) counts the
-  // winners that were frame keypoints already.
-  void extractFromCorners(const ImagePyramid& pyramid, const OrbCorners& corners, const cv::Rect& roi, int n_features,
+  // already have. Those are returned and marked in_frame in `corners` (they
+  // join the frame's keypoints), so an overlapping ROI after this one does not
+  // describe them again; `frame_winners` (when given) counts the winners that
+  // were in_frame already.
+  void extractFromCorners(const ImagePyramid& pyramid, OrbCorners& corners, const cv::Rect& roi, int n_features,
                           std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors, int* frame_winners = nullptr) const;
 
   const OrbParams& params() const { return params_; }
@@ -104,8 +106,9 @@ class OrbExtractor {
 
   // The ROI of level `level` in its own pixels, kept kEdgeBorder inside it (may be empty).
   cv::Rect levelRegion(const ImagePyramid& pyramid, int level, const cv::Rect& area) const;
-  // Angle and size of the chosen corners of level `level`, then their descriptors in order.
+  // Octave, size and intensity-centroid angle of a chosen corner of level `level`.
   void orient(const ImagePyramid& pyramid, int level, OrbCorner& corner) const;
+  // Rotated BRIEF of oriented corners, in order; keypoints get their level-0 positions.
   void describe(const ImagePyramid& pyramid, const std::vector<OrbCorner>& kept, std::vector<cv::KeyPoint>& keypoints,
                 cv::Mat& descriptors) const;
 };

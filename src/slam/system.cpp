@@ -20,7 +20,7 @@ System::System(const Config& config, const SystemOptions& options)
     : config_(config),
       options_(options),
       map_(std::make_unique<Map>()),
-      detection_(makeDetectionStage(config.detector, &timer_)),
+      detection_(makeDetectionStage(config.detector, &timer_, options.deterministic)),
       frame_builder_(std::make_unique<FrameBuilder>(
           config, config.camera, detection_ ? detection_->dynamicClassIds() : std::vector<int>(),
           detection_ ? detection_->movingClassIds() : std::vector<int>())),
@@ -78,22 +78,20 @@ LoopClosingState System::loopClosingState() const {
 }
 
 void System::submitAhead(int index, const cv::Mat& image) {
-  if (!detection_ || detection_submitted_.count(index)) return;
-  detection_->submit(index, image);
-  detection_submitted_.insert(index);
+  if (detection_) detection_->submitAhead(index, image);
 }
 
 bool System::processFrame(int index, double timestamp, const cv::Mat& image, const cv::Mat& depth_m) {
   ScopedStage total(&timer_, "frame");
-  std::vector<Detection> detections;
-  if (detection_) {
-    ScopedStage wait(&timer_, "detect_wait");
-    if (!detection_submitted_.count(index)) detection_->submit(index, image);
-    detection_submitted_.erase(index);
-    detections = detection_->wait(index);
-  }
+  BoxSource boxes;
+  if (detection_)
+    boxes = [&](const FeatureSnapshot& own) {
+      ScopedStage wait(&timer_, "detect_wait");
+      return detection_->boxesFor(own, image);
+    };
   Frame frame;
   FrameFilterResult filter;
+  FeatureSnapshot own_features;
   {
     ScopedStage stage(&timer_, "extract");
     // Monocular initialisation matches only the finest level: extract twice the
@@ -101,21 +99,25 @@ bool System::processFrame(int index, double timestamp, const cv::Mat& image, con
     const bool initialising =
         tracking_->state() == TrackingState::NotInitialized && config_.sensor == SensorMode::Monocular;
     const int n_features = initialising ? 2 * config_.orb.n_features : -1;
-    frame = frame_builder_->build(next_frame_id_++, index, timestamp, image, depth_m, n_features,
-                                  detection_ ? &detections : nullptr, &filter);
+    frame = frame_builder_->build(next_frame_id_++, index, timestamp, image, depth_m, n_features, boxes, &filter,
+                                  detection_ ? &own_features : nullptr);
   }
   if (detection_) {
     timer_.record("filter", filter.ms);
+    keypoints_reused_.push_back(filter.frame_keypoints_reused);
+    duplicates_dropped_.push_back(filter.stats.duplicates_dropped);
     keypoints_added_.push_back(filter.stats.keypoints_added);
     keypoints_removed_.push_back(filter.stats.keypoints_removed_dynamic);
     boxes_used_.push_back(filter.stats.boxes_used);
   }
   if (config_.sensor == SensorMode::RgbD && !frame.hasDepthImage()) ++frames_without_depth_;
   bool tracked;
+  const int keyframes_before = tracking_->keyframesCreated();
   {
     ScopedStage stage(&timer_, "track");
     tracked = tracking_->track(frame);
   }
+  if (detection_) detection_->afterTrack(own_features, image, tracking_->keyframesCreated() > keyframes_before);
   // Deterministic mode: loop closing runs synchronously after each frame's mapping.
   if (options_.deterministic && loop_closing_) loop_closing_->processQueued();
   rethrowWorkerFailure();
@@ -246,6 +248,18 @@ DetectionSummary System::detectionSummary() const {
   summary.frames = static_cast<int>(keypoints_added_.size());
   summary.median_ms = percentile(timer_.samples("detect"), 0.5);
   summary.wait_median_ms = percentile(timer_.samples("detect_wait"), 0.5);
+  summary.detect_every = toString(detection_->params().detect_every);
+  summary.box_filter = detection_->params().box_filter;
+  const DetectionScheduleStats schedule = detection_->scheduleStats();
+  summary.network_frames = schedule.network_frames;
+  summary.fresh_frames = schedule.fresh_frames;
+  summary.carried_frames = schedule.carried_frames;
+  summary.box_age_median = percentile(std::vector<double>(schedule.ages.begin(), schedule.ages.end()), 0.5);
+  if (!schedule.carried_iou.empty()) summary.carried_iou_median = percentile(schedule.carried_iou, 0.5);
+  summary.boxes_expired = schedule.expired;
+  summary.boxes_unmoved = schedule.unmoved;
+  for (int reused : keypoints_reused_) summary.frame_keypoints_reused_total += reused;
+  for (int dropped : duplicates_dropped_) summary.duplicates_dropped_total += dropped;
   summary.keypoints_added_per_frame = median(keypoints_added_);
   summary.keypoints_removed_per_frame = median(keypoints_removed_);
   summary.boxes_used_per_frame = median(boxes_used_);

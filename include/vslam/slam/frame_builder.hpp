@@ -1,11 +1,13 @@
 #pragma once
 // Turns an image into a Frame: ORB extraction on one pyramid, the paper's
 // keypoint filter with the frame's detections, undistortion, colours, depth.
+#include <functional>
 #include <vector>
 
 #include <opencv2/core.hpp>
 
 #include "vslam/core/config.hpp"
+#include "vslam/detect/box_carrier.hpp"
 #include "vslam/detect/detector.hpp"
 #include "vslam/detect/keypoint_filter.hpp"
 #include "vslam/feature/orb_extractor.hpp"
@@ -17,7 +19,13 @@ namespace vslam {
 struct FrameFilterResult {
   KeypointFilterStats stats;
   double ms = 0.0;  // wall time of the filter (ORB in the boxes included)
+  // detector.box_filter "reuse": box winners that were the frame's own keypoints
+  // already (the duplicates the paper's filter extracts again and drops).
+  int frame_keypoints_reused = 0;
 };
+
+// The boxes for a frame, given its own keypoints (before the filter).
+using BoxSource = std::function<std::vector<Detection>(const FeatureSnapshot& own_features)>;
 
 class FrameBuilder {
  public:
@@ -35,6 +43,11 @@ class FrameBuilder {
   Frame build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m = cv::Mat(),
               int n_features = -1, const std::vector<Detection>* detections = nullptr,
               FrameFilterResult* filter = nullptr) const;
+  // The same with boxes that depend on the frame's own keypoints (carried
+  // boxes); `boxes` empty: no filter. `own_features` (when given) receives the
+  // frame's own keypoints and descriptors.
+  Frame build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m, int n_features,
+              const BoxSource& boxes, FrameFilterResult* filter, FeatureSnapshot* own_features) const;
 
   const ScalePyramid& pyramid() const { return pyramid_; }
   const PinholeCamera& camera() const { return camera_; }

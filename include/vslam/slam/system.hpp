@@ -98,6 +98,18 @@ struct DetectionSummary {
   double keypoints_removed_per_frame = 0.0; // median, inside dynamic-class boxes
   double boxes_used_per_frame = 0.0;        // median
   long keypoints_added_total = 0;
+  // Issue 15: which frames the network saw and how the others got their boxes.
+  std::string detect_every;   // "1", "N", "keyframes" or "auto"
+  std::string box_filter;     // "paper" or "reuse"
+  int network_frames = 0;     // detections used (one network run each)
+  int fresh_frames = 0;       // frames with a box of their own detection
+  int carried_frames = 0;     // frames with only carried boxes, or none
+  double box_age_median = 0.0;  // frames, over every box handed to the filter
+  double carried_iou_median = -1.0;  // every N-th frame, N > 1: carried box against the fresh one (-1: none)
+  int boxes_expired = 0;      // carried boxes dropped for age
+  int boxes_unmoved = 0;      // carried boxes dropped for too few matches to move them
+  long frame_keypoints_reused_total = 0;  // "reuse": box winners that were frame keypoints already
+  long duplicates_dropped_total = 0;      // "paper": box keypoints extracted again and dropped as the frame's own
 };
 
 class System {
@@ -175,9 +187,8 @@ class System {
   bool localize_ = false;             // loaded with localize: the map is never changed
   int frames_without_depth_ = 0;
   bool finished_ = false;
-  std::set<int> detection_submitted_;  // frames submitted to detection and not yet waited for
   // Keypoint filter outcome per frame (Tracking's thread only).
-  std::vector<int> keypoints_added_, keypoints_removed_, boxes_used_;
+  std::vector<int> keypoints_added_, keypoints_removed_, boxes_used_, keypoints_reused_, duplicates_dropped_;
 };
 
 }  // namespace vslam

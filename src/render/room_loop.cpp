@@ -72,6 +72,22 @@ cv::Mat drawPanelTexture(int size, cv::RNG& rng) {
   return texture;
 }
 
+// A mipmapped, edge-clamped GL texture of a BGR image; returns its name.
+GLuint uploadTexture(const cv::Mat& bgr) {
+  cv::Mat rgb;
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  GLuint texture = 0;
+  glGenTextures(1, &texture);
+  glBindTexture(GL_TEXTURE_2D, texture);
+  glTexParameteri(GL_TEXTURE_2D, GL_GENERATE_MIPMAP, GL_TRUE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, rgb.cols, rgb.rows, 0, GL_RGB, GL_UNSIGNED_BYTE, rgb.data);
+  return texture;
+}
+
 // Splits the rectangle origin + a*u + b*v (a, b in [0, 1]) into n_u x n_v panels.
 void addPanels(const Vec3& origin, const Vec3& u, const Vec3& v, int n_u, int n_v, std::vector<Panel>& panels) {
   for (int i = 0; i < n_u; ++i)
@@ -216,34 +232,13 @@ RoomLoopRenderer::RoomLoopRenderer(const RoomLoopParams& params) : scene_(std::m
 
   cv::RNG rng(params.seed);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  for (Panel& panel : panels) {
-    cv::Mat rgb;
-    cv::cvtColor(drawPanelTexture(params.texture_px, rng), rgb, cv::COLOR_BGR2RGB);
-    glGenTextures(1, &panel.texture);
-    glBindTexture(GL_TEXTURE_2D, panel.texture);
-    glTexParameteri(GL_TEXTURE_2D, GL_GENERATE_MIPMAP, GL_TRUE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, rgb.cols, rgb.rows, 0, GL_RGB, GL_UNSIGNED_BYTE, rgb.data);
-  }
+  for (Panel& panel : panels) panel.texture = uploadTexture(drawPanelTexture(params.texture_px, rng));
   if (!params.moving_object_image.empty()) {
     const cv::Mat image = cv::imread(params.moving_object_image, cv::IMREAD_COLOR);
     if (image.empty())
       throw InputError(params.moving_object_image + ": not a readable image (the moving object's picture)");
     scene_->moving_object_aspect = static_cast<double>(image.rows) / image.cols;
-    cv::Mat rgb;
-    cv::cvtColor(image, rgb, cv::COLOR_BGR2RGB);
-    Panel& billboard = scene_->moving_object;
-    glGenTextures(1, &billboard.texture);
-    glBindTexture(GL_TEXTURE_2D, billboard.texture);
-    glTexParameteri(GL_TEXTURE_2D, GL_GENERATE_MIPMAP, GL_TRUE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, rgb.cols, rgb.rows, 0, GL_RGB, GL_UNSIGNED_BYTE, rgb.data);
+    scene_->moving_object.texture = uploadTexture(image);
     setFrame(0);
   }
   if (glGetError() != GL_NO_ERROR) throw std::runtime_error("RoomLoopRenderer: OpenGL refused the panel textures");

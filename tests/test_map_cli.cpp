@@ -5,11 +5,13 @@
 #include <algorithm>
 #include <fstream>
 #include <map>
+#include <set>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "cli_test_support.hpp"
+#include "map_test_support.hpp"
 #include "vslam/io/sequence.hpp"
 #include "vslam/map_io/sqlite_database.hpp"
 #include "vslam/slam/system.hpp"
@@ -25,9 +27,7 @@ using test::quoted;
 using test::slurp;
 using test::vslamBinary;
 
-test::CliOutcome vslam(const std::string& args, const fs::path& dir) {
-  return test::runFromProjectRoot(vslamBinary() + " " + args, dir);
-}
+constexpr auto vslam = test::runVslam;
 
 TEST(MapCli, SavedMapHoldsTheRunsKeyFramesAndPoints) {
   const fs::path dir = test::scratchDir("map_cli_save");
@@ -55,27 +55,6 @@ TEST(MapCli, SavedMapHoldsTheRunsKeyFramesAndPoints) {
   EXPECT_EQ(slurp(dir / "map.ply"), slurp(dir / "run" / "map.ply"));
 }
 
-// Every row of every table of a map file but map_info's creation time and
-// sequence name, as text (quote() prints every digit of a REAL and BLOBs in hex).
-std::map<std::string, std::vector<std::string>> mapRows(const std::string& path) {
-  SqliteDatabase db(path, SqliteDatabase::Access::ReadOnly);
-  std::vector<std::string> tables;
-  {
-    SqliteStatement names = db.prepare("SELECT name FROM sqlite_master WHERE type = 'table' ORDER BY name");
-    while (names.step()) tables.push_back(names.text(0));
-  }
-  std::map<std::string, std::vector<std::string>> rows;
-  for (const std::string& table : tables) {
-    SqliteStatement columns = db.prepare("SELECT name FROM pragma_table_info('" + table + "')");
-    std::string select;
-    while (columns.step()) select += (select.empty() ? "" : " || '|' || ") + ("quote(" + columns.text(0) + ")");
-    const std::string where = table == "map_info" ? " WHERE key NOT IN ('created_utc', 'sequence')" : "";
-    SqliteStatement all = db.prepare("SELECT " + select + " FROM " + table + where);
-    while (all.step()) rows[table].push_back(all.text(0));
-    std::sort(rows[table].begin(), rows[table].end());
-  }
-  return rows;
-}
 
 // The round trip on a real map (fr1_xyz, threaded run, real vocabulary, culled
 // keyframes leaving gaps in the ids): loaded into a System and saved again, it
@@ -97,7 +76,9 @@ TEST(MapCli, RealMapLoadedIntoASystemAndSavedAgainGivesTheSameRows) {
     system.loadMap(first, true);
     system.saveMap(second, "round trip");
   }
-  const auto rows_first = mapRows(first), rows_second = mapRows(second);
+  // Not the creation time and sequence name, which differ between the two saves.
+  const std::set<std::string> volatile_info = {"created_utc", "sequence"};
+  const auto rows_first = test::mapFileRows(first, volatile_info), rows_second = test::mapFileRows(second, volatile_info);
   EXPECT_GT(rows_first.at("keyframes").size(), 3u);
   EXPECT_GT(rows_first.at("bow_words").size(), 100u);
   for (const auto& [table, rows] : rows_first) EXPECT_EQ(rows, rows_second.at(table)) << table;

@@ -13,6 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include "map_test_support.hpp"
+
 #include "vslam/core/error.hpp"
 #include "vslam/map/map.hpp"
 #include "vslam/map_io/map_database.hpp"
@@ -135,27 +137,6 @@ class MapIoTest : public ::testing::Test {
     db.execute(sql);
   }
 
-  // Every row of every table, as text, ordered: what "the same rows" compares.
-  static std::map<std::string, std::vector<std::string>> allRows(const std::string& path) {
-    SqliteDatabase db(path, SqliteDatabase::Access::ReadOnly);
-    std::vector<std::string> tables;
-    {
-      SqliteStatement names = db.prepare("SELECT name FROM sqlite_master WHERE type = 'table' ORDER BY name");
-      while (names.step()) tables.push_back(names.text(0));
-    }
-    std::map<std::string, std::vector<std::string>> rows;
-    for (const std::string& table : tables) {
-      // quote() prints REALs with every digit and BLOBs in hex.
-      SqliteStatement columns = db.prepare("SELECT name FROM pragma_table_info('" + table + "')");
-      std::string select;
-      while (columns.step()) select += (select.empty() ? "" : " || '|' || ") + ("quote(" + columns.text(0) + ")");
-      SqliteStatement all = db.prepare("SELECT " + select + " FROM " + table + " ORDER BY 1");
-      while (all.step()) rows[table].push_back(all.text(0));
-      std::sort(rows[table].begin(), rows[table].end());
-    }
-    return rows;
-  }
-
   // The message of the InputError `load` throws ("" when none).
   std::string refusal(const std::string& path) {
     try {
@@ -186,7 +167,7 @@ TEST_F(MapIoTest, SaveLoadSaveGivesTheSameRows) {
   loadMapDatabase(first, loaded, camera_, pyramid_, &objects, &class_names);
   const std::string second = (dir_ / "second.sqlite").string();
   saveMapDatabase(second, loaded, header, objects, class_names);
-  const auto rows_first = allRows(first), rows_second = allRows(second);
+  const auto rows_first = test::mapFileRows(first), rows_second = test::mapFileRows(second);
   ASSERT_EQ(rows_first.size(), 15u);  // every table of schema 1
   for (const auto& [table, rows] : rows_first) EXPECT_EQ(rows, rows_second.at(table)) << table;
   EXPECT_EQ(rows_first.at("keyframes").size(), 4u);   // the culled keyframe is not saved

@@ -22,9 +22,7 @@ using test::quoted;
 using test::slurp;
 using test::vslamBinary;
 
-test::CliOutcome vslam(const std::string& args, const fs::path& dir) {
-  return test::runFromProjectRoot(vslamBinary() + " " + args, dir);
-}
+constexpr auto vslam = test::runVslam;
 
 std::string fr1XyzRun(const fs::path& out) {
   return "run --seq tum/fr1_xyz --detector none --no-render --out " + quoted(out.string());

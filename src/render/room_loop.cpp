@@ -164,34 +164,40 @@ PinholeCamera RoomLoopParams::defaultCamera() {
   return camera;
 }
 
+namespace {
+
+// The camera's pose at frame k of the circle.
+StampedPose roomLoopPose(const RoomLoopParams& params, int k) {
+  const double total_angle = 2.0 * M_PI * params.turns;
+  const double angle = params.frames > 1 ? total_angle * k / (params.frames - 1) : 0.0;
+  const Vec3 outward(std::cos(angle), 0.0, std::sin(angle));
+  const Vec3 centre = params.path_radius_m * outward + Vec3(0.0, params.bob_m * std::sin(2.0 * angle), 0.0);
+  // Camera axes in the world: z looks outwards, y is down, x = y cross z.
+  Mat3 R_wc;
+  R_wc.col(2) = outward;
+  R_wc.col(1) = Vec3(0.0, 1.0, 0.0);
+  R_wc.col(0) = R_wc.col(1).cross(R_wc.col(2));
+  return {params.start_time_s + k / params.camera.fps, SE3(R_wc, centre)};
+}
+
+}  // namespace
+
 std::vector<StampedPose> roomLoopPath(const RoomLoopParams& params) {
   std::vector<StampedPose> path;
-  const double total_angle = 2.0 * M_PI * params.turns;
-  for (int k = 0; k < params.frames; ++k) {
-    const double angle = params.frames > 1 ? total_angle * k / (params.frames - 1) : 0.0;
-    const Vec3 outward(std::cos(angle), 0.0, std::sin(angle));
-    const Vec3 centre = params.path_radius_m * outward + Vec3(0.0, params.bob_m * std::sin(2.0 * angle), 0.0);
-    // Camera axes in the world: z looks outwards, y is down, x = y cross z.
-    Mat3 R_wc;
-    R_wc.col(2) = outward;
-    R_wc.col(1) = Vec3(0.0, 1.0, 0.0);
-    R_wc.col(0) = R_wc.col(1).cross(R_wc.col(2));
-    path.push_back({params.start_time_s + k / params.camera.fps, SE3(R_wc, centre)});
-  }
+  for (int k = 0; k < params.frames; ++k) path.push_back(roomLoopPose(params, k));
   return path;
 }
 
 std::array<Vec3, 4> movingObjectCorners(const RoomLoopParams& params, int frame, double aspect) {
-  const std::vector<StampedPose> path = roomLoopPath(params);
   const int first = params.moving_object_first_frame;
   const int crossing = std::max(1, params.moving_object_frames);
-  const int last = static_cast<int>(path.size()) - 1;
+  const int last = params.frames - 1;
   // Where it is in its crossing, held at either end.
   const int k = std::clamp(std::clamp(frame, first, first + crossing), 0, std::max(last, 0));
   const double progress = static_cast<double>(k - first) / crossing;
   // The camera's heading at that frame (so the object keeps in view while the
   // camera turns), plus a bearing that sweeps across the view.
-  const Vec3 view = path[k].T_wc.R.col(2);
+  const Vec3 view = roomLoopPose(params, k).T_wc.R.col(2);
   const double heading = std::atan2(view.z(), view.x());
   const double bearing = (0.5 - progress) * params.moving_object_sweep_deg * M_PI / 180.0;
   const double angle = heading + bearing;

@@ -57,6 +57,11 @@ inline CliOutcome runFromProjectRoot(const std::string& command, const std::file
   return outcome;
 }
 
+// `vslam ARGS` run from the project root, output into `dir`.
+inline CliOutcome runVslam(const std::string& args, const std::filesystem::path& dir) {
+  return runFromProjectRoot(vslamBinary() + " " + args, dir);
+}
+
 // A fresh scratch folder for one call of the current test (ctest may run a
 // file's tests in parallel, and suites may share test names).
 inline std::filesystem::path callDir(const std::string& prefix) {

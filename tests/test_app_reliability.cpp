@@ -236,12 +236,19 @@ void expectInterruptedRunKept(const fs::path& out, const std::string& signal_nam
 
 TEST(ReliabilitySignals, CtrlCMidRunWritesWhatWasComputedAndExits130) {
   const fs::path dir = test::scratchDir("reliability_sigint");
-  const Outcome run =
-      interruptedRun("run --seq tum/fr1_xyz --detector none --no-render --out " + quoted((dir / "run").string()),
-                     "INT", dir);
+  const std::string map = (dir / "map.sqlite").string();
+  const Outcome run = interruptedRun("run --seq tum/fr1_xyz --detector none --no-render --out " +
+                                         quoted((dir / "run").string()) + " --save-map " + quoted(map),
+                                     "INT", dir);
   EXPECT_EQ(run.exit_code, 130) << run.err;
   EXPECT_TRUE(contains(run.out, "status: interrupted (SIGINT after ")) << run.out;
   expectInterruptedRunKept(dir / "run", "SIGINT", 798);
+  // The map is saved too (issue 17), whole: it holds the run's keyframes.
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir / "run" / "report.json"));
+  EXPECT_EQ(report["map_file"], map);
+  const Outcome info = vslam("map info " + quoted(map), dir);
+  EXPECT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_TRUE(contains(info.out, "keyframes: " + std::to_string(report["keyframes"].get<int>()) + " (")) << info.out;
 }
 
 TEST(ReliabilitySignals, SigtermMidRunWritesWhatWasComputedAndExits143) {

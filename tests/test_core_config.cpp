@@ -195,5 +195,34 @@ TEST(Config, OrbSlam2SettingsThatAreAListAreANamedError) {
   EXPECT_NE(errorOf(path).find(path + ": expected a mapping of keys"), std::string::npos) << errorOf(path);
 }
 
+// Issue 15: when the detector runs, read from the config and checked with the line.
+TEST(Config, DetectEveryIsReadAndCheckedWithItsLine) {
+  const std::string camera = "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: 500\n  cx: 320\n  cy: 240\n";
+  Config config = parseConfig(camera + "detector:\n  detect_every: 5\n  max_box_age: 7\n  dnn_threads: 1\n  box_filter: reuse\n",
+                              "five.yaml");
+  EXPECT_EQ(config.detector.detect_every.mode, DetectEvery::Mode::Frames);
+  EXPECT_EQ(config.detector.detect_every.frames, 5);
+  EXPECT_EQ(config.detector.max_box_age, 7);
+  EXPECT_EQ(config.detector.dnn_threads, 1);
+  EXPECT_EQ(config.detector.box_filter, "reuse");
+  config = parseConfig(camera + "detector:\n  detect_every: keyframes\n", "kf.yaml");
+  EXPECT_EQ(config.detector.detect_every.mode, DetectEvery::Mode::KeyFrames);
+  config = parseConfig(camera + "detector:\n  detect_every: auto\n", "auto.yaml");
+  EXPECT_EQ(config.detector.detect_every.mode, DetectEvery::Mode::Auto);
+  EXPECT_EQ(toString(config.detector.detect_every), "auto");
+
+  for (const std::string bad : {"0", "-2", "sometimes", "2.5", "1x"}) {
+    try {
+      parseConfig(camera + "detector:\n  detect_every: " + bad + "\n", "bad.yaml");
+      ADD_FAILURE() << "accepted detect_every " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.yaml:9:"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("detector.detect_every"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(parseConfig(camera + "detector:\n  box_filter: fast\n", "bad.yaml"), InputError);
+  EXPECT_THROW(parseConfig(camera + "detector:\n  max_box_age: -1\n", "bad.yaml"), InputError);
+}
+
 }  // namespace
 }  // namespace vslam

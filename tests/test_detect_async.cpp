@@ -9,6 +9,7 @@
 #include <thread>
 
 #include <gtest/gtest.h>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "test_support.hpp"
@@ -135,10 +136,17 @@ TEST(DetectionStage, ResolvesDynamicClassesAndDetectsAhead) {
   EXPECT_EQ(stage->dynamicClassIds(), (std::vector<int>{0, 56}));
   EXPECT_EQ(stage->classNames().size(), 80u);
   const cv::Mat dog = cv::imread((test::sharedData() / "images/dog.jpg").string());
-  stage->submit(0, dog);
-  stage->submit(1, dog);
-  EXPECT_EQ(stage->wait(0).size(), 3u);
-  EXPECT_EQ(stage->wait(1).size(), 3u);
+  // Every frame (the default): both submitted ahead, each frame gets its own three boxes, fresh.
+  stage->submitAhead(0, dog);
+  stage->submitAhead(1, dog);
+  FeatureSnapshot frame;
+  frame.frame_index = 0;
+  EXPECT_EQ(stage->boxesFor(frame, dog).size(), 3u);
+  frame.frame_index = 1;
+  EXPECT_EQ(stage->boxesFor(frame, dog).size(), 3u);
+  EXPECT_EQ(stage->scheduleStats().network_frames, 2);
+  EXPECT_EQ(stage->scheduleStats().fresh_frames, 2);
+  EXPECT_EQ(stage->scheduleStats().ages, (std::vector<int>(6, 0)));
 
   params.dynamic_classes = {"pedestrian"};
   try {
@@ -146,6 +154,24 @@ TEST(DetectionStage, ResolvesDynamicClassesAndDetectsAhead) {
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("pedestrian"), std::string::npos) << e.what();
+  }
+}
+
+// The thread budget holds while a detector is loaded and is lifted with it.
+TEST(DetectionStage, ThreadBudgetHoldsWhileTheStageLives) {
+  const int before = cv::getNumThreads();
+  DetectorParams params;
+  params.dnn_threads = 1;
+  {
+    const auto stage = makeDetectionStage(params);
+    ASSERT_NE(stage, nullptr);
+    EXPECT_EQ(cv::getNumThreads(), 1);
+  }
+  EXPECT_EQ(cv::getNumThreads(), before);
+  params.dnn_threads = 0;  // OpenCV's own count, untouched
+  {
+    const auto stage = makeDetectionStage(params);
+    EXPECT_EQ(cv::getNumThreads(), before);
   }
 }
 

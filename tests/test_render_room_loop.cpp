@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "test_support.hpp"
+#include "vslam/core/error.hpp"
 #include "vslam/io/sequence.hpp"
 #include "vslam/render/room_loop.hpp"
 
@@ -236,6 +237,104 @@ TEST(RoomLoop, WritesATumFolderThatOpensAsASequence) {
   RoomLoopRenderer renderer(params);
   const cv::Mat written = sequence.loadColor(2);
   EXPECT_EQ(cv::norm(written, renderer.render(path[2].T_wc), cv::NORM_INF), 0.0);  // PNG is lossless
+}
+
+}  // namespace
+}  // namespace vslam
+
+namespace vslam {
+namespace {
+
+// A room with a billboard of a plain picture (pure red, twice as wide as
+// tall) crossing the view during frames 20-60 of 100.
+RoomLoopParams roomWithMovingObject(const std::string& scratch) {
+  RoomLoopParams params = smallRoom(100);
+  const std::filesystem::path picture = test::scratchDir(scratch) / "red.png";
+  cv::imwrite(picture.string(), cv::Mat(50, 100, CV_8UC3, cv::Scalar(0, 0, 255)));
+  params.moving_object_image = picture.string();
+  params.moving_object_first_frame = 20;
+  params.moving_object_frames = 40;
+  params.moving_object_sweep_deg = 40.0;
+  return params;
+}
+
+// The bearing of a world point from the camera, in the horizontal plane,
+// positive towards the camera's +x.
+double bearingDeg(const SE3& T_wc, const Vec3& point_w) {
+  const Vec3 p_c = T_wc.inverse() * point_w;
+  return std::atan2(p_c.x(), p_c.z()) * 180.0 / M_PI;
+}
+
+TEST(RoomLoopMovingObject, CrossesTheViewFromSideToSideFacingTheRoomsCentre) {
+  const RoomLoopParams params = roomWithMovingObject("moving_object_geometry");
+  const std::vector<StampedPose> path = roomLoopPath(params);
+  const double aspect = 0.5;
+  auto centreAt = [&](int frame) {
+    const std::array<Vec3, 4> c = movingObjectCorners(params, frame, aspect);
+    return Vec3(0.25 * (c[0] + c[1] + c[2] + c[3]));
+  };
+  // The sweep: from one side of the camera's heading to the other, at the given radius, at y = 0.
+  for (const auto& [frame, bearing] : std::vector<std::pair<int, double>>{{20, 20.0}, {40, 0.0}, {60, -20.0}}) {
+    const Vec3 centre = centreAt(frame);
+    EXPECT_NEAR(Vec2(centre.x(), centre.z()).norm(), params.moving_object_radius_m, 1e-12) << frame;
+    EXPECT_NEAR(centre.y(), 0.0, 1e-12) << frame;
+    // Bearing from the room's centre relative to the camera's heading (the
+    // camera itself is off-centre, so its own bearing of the object differs).
+    const Vec3 heading = path[frame].T_wc.R.col(2);
+    const double angle = std::atan2(centre.z(), centre.x()) - std::atan2(heading.z(), heading.x());
+    EXPECT_NEAR(std::remainder(angle, 2 * M_PI) * 180.0 / M_PI, bearing, 1e-9) << frame;
+  }
+  // The camera sees it cross: its bearing from the camera changes sign.
+  EXPECT_LT(bearingDeg(path[20].T_wc, centreAt(20)) * bearingDeg(path[60].T_wc, centreAt(60)), 0.0);
+  // Still before and after its crossing.
+  EXPECT_EQ((centreAt(0) - centreAt(20)).norm(), 0.0);
+  EXPECT_EQ((centreAt(99) - centreAt(60)).norm(), 0.0);
+  // Upright, width and height as asked, facing the room's centre.
+  const std::array<Vec3, 4> c = movingObjectCorners(params, 40, aspect);
+  EXPECT_NEAR((c[1] - c[0]).norm(), params.moving_object_width_m, 1e-12);
+  EXPECT_NEAR((c[3] - c[0]).norm(), aspect * params.moving_object_width_m, 1e-12);
+  EXPECT_NEAR((c[3] - c[0]).normalized().dot(Vec3::UnitY()), 1.0, 1e-12);  // image rows go down (+y)
+  const Vec3 normal = (c[1] - c[0]).cross(c[3] - c[0]).normalized();
+  const Vec3 centre = centreAt(40);
+  EXPECT_NEAR(std::abs(normal.dot(Vec3(centre.x(), 0, centre.z()).normalized())), 1.0, 1e-12);
+}
+
+TEST(RoomLoopMovingObject, IsDrawnInColourAndDepthWhereItStands) {
+  const RoomLoopParams params = roomWithMovingObject("moving_object_render");
+  const std::vector<StampedPose> path = roomLoopPath(params);
+  RoomLoopRenderer renderer(params);
+  // Mid-crossing it is straight ahead of the room's centre through the camera:
+  // on the principal point, radius - path radius away along the optical axis.
+  renderer.setFrame(40);
+  const SE3& T_wc = path[40].T_wc;
+  const cv::Mat image = renderer.render(T_wc);
+  const cv::Mat depth = renderer.renderDepth(T_wc);
+  const cv::Point principal(cvRound(params.camera.cx), cvRound(params.camera.cy));
+  EXPECT_EQ(image.at<cv::Vec3b>(principal), cv::Vec3b(0, 0, 255));
+  EXPECT_NEAR(depth.at<float>(principal), params.moving_object_radius_m - params.path_radius_m, 2e-4);
+  // Its 0.75 m x 0.375 m at 1.1 m cover about 358 x 179 px: a corner of the image is room.
+  EXPECT_NEAR(depth.at<float>(0, 0), roomDepthAt(params, T_wc, 0, 0), 2e-4);
+  EXPECT_NE(image.at<cv::Vec3b>(0, 0), cv::Vec3b(0, 0, 255));
+
+  // At frame 0 it waits out of view: the picture is the static room's.
+  RoomLoopParams static_room = params;
+  static_room.moving_object_image.clear();
+  RoomLoopRenderer static_renderer(static_room);
+  renderer.setFrame(0);
+  EXPECT_EQ(cv::norm(renderer.render(path[0].T_wc), static_renderer.render(path[0].T_wc), cv::NORM_INF), 0.0);
+  // Mid-crossing the two differ.
+  EXPECT_GT(cv::norm(image, static_renderer.render(T_wc), cv::NORM_INF), 0.0);
+}
+
+TEST(RoomLoopMovingObject, AnUnreadablePictureIsAnInputErrorNamingTheFile) {
+  RoomLoopParams params = smallRoom(2);
+  params.moving_object_image = (test::scratchDir("moving_object_bad") / "missing.png").string();
+  try {
+    RoomLoopRenderer renderer(params);
+    FAIL() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("missing.png"), std::string::npos) << error.what();
+  }
 }
 
 }  // namespace

@@ -78,8 +78,13 @@ int run(RunCommandOptions options) {
   Sequence sequence = openOrFetch(options);
   const size_t total_frames = sequence.frames.size();
   warnIfIncomplete(sequence, options.seq);
-  if (options.max_frames > 0 && static_cast<size_t>(options.max_frames) < total_frames)
-    sequence.frames.resize(options.max_frames);
+  if (options.pipeline.start_frame > 0 && static_cast<size_t>(options.pipeline.start_frame) >= total_frames)
+    throw InputError(sequence.root, 0,
+                     "--start-frame " + std::to_string(options.pipeline.start_frame) + " is past the sequence's " +
+                         std::to_string(total_frames) + " frames");
+  const size_t first_frame = static_cast<size_t>(options.pipeline.start_frame);
+  if (options.max_frames > 0 && first_frame + options.max_frames < total_frames)
+    sequence.frames.resize(first_frame + options.max_frames);
   applyDetectorOptions(options.detector, sequence.config.detector);
   if (!options.vocabulary.empty()) sequence.config.loop.vocabulary = options.vocabulary;
   if (options.no_loop) sequence.config.loop.enabled = false;
@@ -101,11 +106,13 @@ int run(RunCommandOptions options) {
   std::cout << "sequence: " << sequence.name << "\n";
   std::cout << "root: " << sequence.root << "\n";
   std::cout << "kind: " << (sequence.kind == SequenceKind::Tum ? "tum" : "kitti") << "\n";
-  std::cout << "frames: " << sequence.frames.size();
-  if (sequence.frames.size() != total_frames)
+  std::cout << "frames: " << sequence.frames.size() - first_frame;
+  if (first_frame > 0)
+    std::cout << " (" << first_frame << " to " << sequence.frames.size() - 1 << " of " << total_frames << ")";
+  else if (sequence.frames.size() != total_frames)
     std::cout << " (first " << sequence.frames.size() << " of " << total_frames << ")";
   std::cout << "\n";
-  const double first_t = sequence.frames.front().timestamp, last_t = sequence.frames.back().timestamp;
+  const double first_t = sequence.frames[first_frame].timestamp, last_t = sequence.frames.back().timestamp;
   std::cout << "time span: " << fixed(first_t, 6) << " .. " << fixed(last_t, 6) << " s (" << fixed(last_t - first_t, 3)
             << " s)\n";
   std::cout << std::setprecision(10) << "camera: " << c.name << " " << c.width << "x" << c.height << " fx " << c.fx
@@ -165,7 +172,7 @@ Command addRunCommand(CLI::App& app) {
                 "(default: off, every frame is processed and no keyframe is dropped)");
   cli->add_flag("--no-fetch", options->no_fetch,
                 "Do not download a TUM sequence that is not found (default: fetch with tools/fetch_dataset.sh)");
-  cli->add_option("--max-frames", options->max_frames, "Process only the first N frames; 0 = all")
+  cli->add_option("--max-frames", options->max_frames, "Process only N frames (the first N, or N from --start-frame); 0 = all")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cli->add_flag("--strict", options->pipeline.strict,
@@ -173,6 +180,19 @@ Command addRunCommand(CLI::App& app) {
                 "report.json frames_skipped)");
   cli->add_flag("--no-render", options->pipeline.no_render,
                 "Write no PNG figures at the end (default: render them into the output folder, as `vslam render`)");
+  cli->add_option("--start-frame", options->pipeline.start_frame,
+                  "Start at this frame (0-based position in the sequence); --max-frames counts from it")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cli->add_option("--load-map", options->pipeline.load_map,
+                  "Start in a map saved by `--save-map` (refused when made with another camera, mode or vocabulary): "
+                  "the first frame relocalises in it, then mapping continues in it (default: none)");
+  cli->add_flag("--localize", options->pipeline.localize,
+                "With --load-map: localisation only, as ORB-SLAM2's localisation mode: no keyframe is made and the "
+                "map is not changed (report.json frames_localised_in_loaded_map)");
+  cli->add_option("--save-map", options->pipeline.save_map,
+                  "Save the map at the end (also when interrupted) to this SQLite file, written whole or not at all "
+                  "(docs/MAPS.md) (default: none)");
   cli->add_flag("--info", options->info_only,
                 "Only find the sequence and print what it holds (frames, camera, ground truth); run nothing "
                 "(default: off)");

@@ -19,5 +19,6 @@ Command addRenderCommand(CLI::App& app);
 Command addDetectCommand(CLI::App& app);
 Command addVocabCommand(CLI::App& app);
 Command addSynthCommand(CLI::App& app);
+Command addMapCommand(CLI::App& app);
 
 }  // namespace vslam::app

@@ -1,5 +1,7 @@
 #include "detector_options.hpp"
 
+#include "vslam/core/error.hpp"
+
 namespace vslam::app {
 
 void addDetectorOptions(CLI::App& command, DetectorOptions& options) {
@@ -19,6 +21,19 @@ void addDetectorOptions(CLI::App& command, DetectorOptions& options) {
   command.add_option("--dynamic-classes", options.dynamic_classes,
                      "Comma-separated classes whose keypoints are removed, e.g. person,car")
       ->delimiter(',');
+  command.add_option("--moving-classes", options.moving_classes,
+                     "Comma-separated classes whose boxes are checked for motion each frame: moving instances are "
+                     "kept out of tracking and mapping, parked ones stay (coco-movable: COCO's movable classes)")
+      ->delimiter(',');
+  command.add_option("--detect-every", options.detect_every,
+                     "Frames the network sees: N (every N-th frame; 1 = every frame, the paper), 'keyframes' or 'auto' "
+                     "(whenever the detection thread is free, never waited for); boxes are carried in between");
+  command.add_option("--max-box-age", options.max_box_age, "Frames a carried box lives after its detection (default 30)");
+  command.add_option("--dnn-threads", options.dnn_threads,
+                     "OpenCV threads while a detector is loaded (cv::setNumThreads; default 1); 0: OpenCV's default");
+  command.add_option("--box-filter", options.box_filter,
+                     "paper: ORB again inside each box (Algorithm 1); reuse: only the frame's own FAST corners its "
+                     "quota dropped");
 }
 
 void applyDetectorOptions(const DetectorOptions& options, DetectorParams& params) {
@@ -33,6 +48,27 @@ void applyDetectorOptions(const DetectorOptions& options, DetectorParams& params
   if (options.box_features) params.box_features = *options.box_features;
   if (options.dnn_target) params.dnn_target = *options.dnn_target;
   if (options.dynamic_classes) params.dynamic_classes = *options.dynamic_classes;
+  if (options.moving_classes) params.moving_classes = *options.moving_classes;
+  if (options.detect_every) {
+    const std::optional<DetectEvery> every = parseDetectEvery(*options.detect_every);
+    if (!every)
+      throw InputError("--detect-every: expected a whole number >= 1, 'keyframes' or 'auto', not '" +
+                       *options.detect_every + "'");
+    params.detect_every = *every;
+  }
+  if (options.max_box_age) {
+    if (*options.max_box_age < 0) throw InputError("--max-box-age: must be >= 0, not " + std::to_string(*options.max_box_age));
+    params.max_box_age = *options.max_box_age;
+  }
+  if (options.dnn_threads) {
+    if (*options.dnn_threads < 0) throw InputError("--dnn-threads: must be >= 0, not " + std::to_string(*options.dnn_threads));
+    params.dnn_threads = *options.dnn_threads;
+  }
+  if (options.box_filter) {
+    if (*options.box_filter != "paper" && *options.box_filter != "reuse")
+      throw InputError("--box-filter: expected 'paper' or 'reuse', not '" + *options.box_filter + "'");
+    params.box_filter = *options.box_filter;
+  }
 }
 
 }  // namespace vslam::app

@@ -21,11 +21,17 @@ struct DetectorOptions {
   std::optional<int> box_features;
   std::optional<std::string> dnn_target;
   std::optional<std::vector<std::string>> dynamic_classes;
+  std::optional<std::vector<std::string>> moving_classes;
+  std::optional<std::string> detect_every;
+  std::optional<int> max_box_age;
+  std::optional<int> dnn_threads;
+  std::optional<std::string> box_filter;
 };
 
 void addDetectorOptions(CLI::App& command, DetectorOptions& options);
 
-// Overrides the fields given on the command line.
+// Overrides the fields given on the command line; throws InputError naming
+// the option for a value out of range (e.g. --detect-every 0).
 void applyDetectorOptions(const DetectorOptions& options, DetectorParams& params);
 
 }  // namespace vslam::app

@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
       vslam::app::addDetectCommand(app),
       vslam::app::addVocabCommand(app),
       vslam::app::addSynthCommand(app),
+      vslam::app::addMapCommand(app),
   };
 
   try {

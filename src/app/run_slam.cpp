@@ -277,16 +277,31 @@ void writeObjectsJson(const std::string& path, const std::vector<ObjectLandmark>
 
 nlohmann::json detectorJson(const DetectionSummary& summary) {
   if (!summary.enabled) return {{"model", "none"}};
-  return {{"model", summary.model},
-          {"cfg", summary.cfg},
-          {"input_size", summary.input_size},
-          {"median_ms", summary.median_ms},
-          {"wait_median_ms", summary.wait_median_ms},
-          {"keypoints_added_per_frame", summary.keypoints_added_per_frame},
-          {"keypoints_added_total", summary.keypoints_added_total},
-          {"keypoints_removed_per_frame", summary.keypoints_removed_per_frame},
-          {"boxes_used_per_frame", summary.boxes_used_per_frame},
-          {"frames", summary.frames}};
+  nlohmann::json json = {{"model", summary.model},
+                         {"cfg", summary.cfg},
+                         {"input_size", summary.input_size},
+                         {"median_ms", summary.median_ms},
+                         {"wait_median_ms", summary.wait_median_ms},
+                         {"keypoints_added_per_frame", summary.keypoints_added_per_frame},
+                         {"keypoints_added_total", summary.keypoints_added_total},
+                         {"keypoints_removed_per_frame", summary.keypoints_removed_per_frame},
+                         {"boxes_used_per_frame", summary.boxes_used_per_frame},
+                         {"frames", summary.frames},
+                         {"detect_every", summary.detect_every},
+                         {"box_filter", summary.box_filter},
+                         {"network_frames", summary.network_frames},
+                         {"fresh_frames", summary.fresh_frames},
+                         {"carried_frames", summary.carried_frames},
+                         {"box_age_median", summary.box_age_median},
+                         {"carried_iou_median",
+                          summary.carried_iou_median < 0 ? nlohmann::json() : nlohmann::json(summary.carried_iou_median)},
+                         {"boxes_expired", summary.boxes_expired},
+                         {"boxes_unmoved", summary.boxes_unmoved},
+                         {"frame_keypoints_reused_total", summary.frame_keypoints_reused_total},
+                         {"duplicates_dropped_total", summary.duplicates_dropped_total}};
+  if (summary.carried_iou_median < 0)
+    json["carried_iou_unavailable"] = "measured only with --detect-every N, N > 1, on the frames the network sees";
+  return json;
 }
 
 enum class RunStatus { Completed, Interrupted, Failed };
@@ -469,6 +484,9 @@ void printSummary(const nlohmann::json& report, System& system, const Sequence& 
   if (stats.initialised_at_index >= 0) std::cout << " (initialised at frame " << stats.initialised_at_index << ")";
   if (!outcome.skipped.empty()) std::cout << ", " << outcome.skipped.size() << " skipped (unreadable)";
   std::cout << "\nkeyframes: " << stats.keyframes << ", map points: " << stats.map_points << "\n";
+  if (!options.load_map.empty())
+    std::cout << "localised in the loaded map (" << options.load_map << (options.localize ? ", localisation only" : "")
+              << "): " << stats.frames_in_loaded_map << " / " << stats.frames << " frames\n";
   if (report["ate"].is_object()) {
     const nlohmann::json& kf = report["ate"]["keyframes"];
     if (kf.is_null())
@@ -520,11 +538,16 @@ void printSummary(const nlohmann::json& report, System& system, const Sequence& 
       std::printf("%s: median %.1f ms, p95 %.1f ms, %zu times\n", stage, summary.at(stage).median_ms,
                   summary.at(stage).p95_ms, summary.at(stage).count);
   const DetectionSummary detection = system.detectionSummary();
-  if (detection.enabled)
+  if (detection.enabled) {
     std::printf("detector: %s at %d, median %.1f ms per frame (Tracking waited %.1f), %.0f keypoints added per "
                 "frame; %d objects\n",
                 detection.model.c_str(), detection.input_size, detection.median_ms, detection.wait_median_ms,
                 detection.keypoints_added_per_frame, report["objects"].get<int>());
+    std::printf("detect every %s: network on %d frames, %d frames with fresh boxes, %d with carried ones only "
+                "(median box age %.0f)\n",
+                detection.detect_every.c_str(), detection.network_frames, detection.fresh_frames,
+                detection.carried_frames, detection.box_age_median);
+  }
   std::cout << "output: " << out_dir << "\n";
   std::fflush(stdout);
 }
@@ -547,7 +570,18 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   SystemOptions system_options;
   system_options.deterministic = options.deterministic;
   system_options.realtime = options.realtime;
+  if (options.localize && options.load_map.empty())
+    throw InputError("--localize needs --load-map: localisation is in a map saved by an earlier run");
+  if (options.localize && !options.save_map.empty())
+    throw InputError("--localize does not change the map, so --save-map would only copy it: drop one of them");
   System system(sequence.config, system_options);
+  std::pair<int, int> loaded{0, 0};  // keyframes and points of the loaded map
+  if (!options.load_map.empty()) {
+    const auto load_start = std::chrono::steady_clock::now();
+    loaded = system.loadMap(options.load_map, options.localize);
+    system.timer().record("load_map",
+                          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - load_start).count());
+  }
   std::error_code error;
   fs::create_directories(out_dir, error);
   if (error) throw InputError(out_dir, 0, "cannot create the output folder: " + error.message());
@@ -592,6 +626,16 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
     for (const ExportedMapPoint& point : system.mapPoints()) cloud.push_back({point.position, point.bgr, point.class_id});
     writeFileAtomically(out_dir + "/map.ply", [&](const std::string& temporary) { writeMapPly(temporary, cloud); });
   });
+  bool map_saved = false;
+  if (!options.save_map.empty())
+    write([&] {
+      const auto save_start = std::chrono::steady_clock::now();
+      system.saveMap(options.save_map, sequence.name);
+      const double save_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - save_start).count();
+      spdlog::info("map saved to {} in {:.2f} s", options.save_map, save_s);
+      system.timer().record("save_map", 1000.0 * save_s);
+      map_saved = true;
+    });
   const bool kitti = sequence.kind == SequenceKind::Kitti;
   std::vector<int> trajectory_frames;  // KITTI: the frame of each pose, by its timestamp (times.txt increases)
   if (kitti) {
@@ -658,7 +702,26 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
       }
   }
   report["final_ba"] = outcome.final_ba;
+  // A run that started in a saved map: the map, and how many frames were localised against it.
+  if (options.load_map.empty()) {
+    report["loaded_map"] = nullptr;
+  } else {
+    report["loaded_map"] = {{"file", options.load_map},
+                            {"localize", options.localize},
+                            {"keyframes", loaded.first},
+                            {"map_points", loaded.second}};
+    report["frames_localised_in_loaded_map"] = stats.frames_in_loaded_map;
+  }
+  // The saved map (docs/MAPS.md); null when none was asked for or it could not be written (see "error").
+  report["map_file"] = map_saved ? nlohmann::json(options.save_map) : nlohmann::json(nullptr);
   report["relocalisations"] = stats.relocalisations;
+  // Per frame and box of a --moving-classes class: what the motion check found.
+  report["moving_objects"] = {{"classes", sequence.config.detector.moving_classes},
+                              {"box_frames_checked", stats.moving_boxes_checked},
+                              {"moving", stats.moving_boxes_moving},
+                              {"parked", stats.moving_boxes_parked},
+                              {"undecided", stats.moving_boxes_undecided},
+                              {"map_points_retired", stats.moving_points_retired}};
   // Where each loop closed: the two keyframes' timestamps (loop keyframes are never culled).
   std::map<long, double> keyframe_timestamp;
   for (const ExportedKeyFrame& keyframe : system.keyFrames()) keyframe_timestamp[keyframe.id] = keyframe.timestamp;

@@ -21,6 +21,9 @@ struct RunOptions {
   int start_frame = 0;
   bool no_render = false;     // true: no PNGs at the end (renderRunFolder)
   bool strict = false;        // an unreadable frame fails the run instead of being skipped
+  std::string save_map;       // "": none; else the map is saved there (SQLite, docs/MAPS.md), interrupted runs too
+  std::string load_map;       // "": start with an empty map; else start in this saved map
+  bool localize = false;      // with load_map: localisation only, the map is not changed
 };
 
 // Returns the process exit status: 0 completed; 130 / 143 stopped by SIGINT /

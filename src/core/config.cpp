@@ -167,6 +167,24 @@ Config loadVslamYaml(const std::string& text, const std::string& path) {
   reader.optional(det, "detector", "box_features", d.box_features);
   reader.optional(det, "detector", "dnn_target", d.dnn_target);
   reader.optional(det, "detector", "dynamic_classes", d.dynamic_classes);
+  reader.optional(det, "detector", "moving_classes", d.moving_classes);
+  if (det && det["detect_every"]) {
+    const YAML::Node node = det["detect_every"];
+    std::string text;
+    reader.optional(det, "detector", "detect_every", text);
+    const std::optional<DetectEvery> every = parseDetectEvery(text);
+    if (!every)
+      throw InputError(path, node.Mark().line + 1,
+                       "detector.detect_every must be a whole number >= 1, 'keyframes' or 'auto', not '" + text + "'");
+    d.detect_every = *every;
+  }
+  reader.optional(det, "detector", "max_box_age", d.max_box_age);
+  reader.optional(det, "detector", "dnn_threads", d.dnn_threads);
+  reader.optional(det, "detector", "box_filter", d.box_filter);
+  if (d.max_box_age < 0 || d.dnn_threads < 0)
+    throw InputError(path, det.Mark().line + 1, "detector.max_box_age and detector.dnn_threads must be >= 0");
+  if (d.box_filter != "paper" && d.box_filter != "reuse")
+    throw InputError(path, det.Mark().line + 1, "detector.box_filter must be 'paper' or 'reuse', not '" + d.box_filter + "'");
   return config;
 }
 
@@ -240,6 +258,34 @@ Config loadOrbSlamSettings(const std::string& text, const std::string& path) {
 }
 
 }  // namespace
+
+std::optional<DetectEvery> parseDetectEvery(const std::string& text) {
+  DetectEvery every;
+  if (text == "keyframes") {
+    every.mode = DetectEvery::Mode::KeyFrames;
+    return every;
+  }
+  if (text == "auto") {
+    every.mode = DetectEvery::Mode::Auto;
+    return every;
+  }
+  if (text.empty() || text.size() > 9 || text.find_first_not_of("0123456789") != std::string::npos) return std::nullopt;
+  every.frames = std::stoi(text);
+  if (every.frames < 1) return std::nullopt;
+  return every;
+}
+
+std::string toString(const DetectEvery& every) {
+  switch (every.mode) {
+    case DetectEvery::Mode::KeyFrames:
+      return "keyframes";
+    case DetectEvery::Mode::Auto:
+      return "auto";
+    case DetectEvery::Mode::Frames:
+      break;
+  }
+  return std::to_string(every.frames);
+}
 
 Config loadConfig(const std::string& path) {
   if (fs::is_directory(path)) throw InputError(path, 0, "is a directory, not a config file");

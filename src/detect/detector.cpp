@@ -55,13 +55,28 @@ std::vector<std::string> readClassNames(const std::string& names_path) {
   return names;
 }
 
+const std::vector<std::string>& cocoMovableClasses() {
+  static const std::vector<std::string> classes = {"person", "bicycle", "car",   "motorbike", "aeroplane",
+                                                   "bus",    "train",   "truck", "boat",      "bird",
+                                                   "cat",    "dog",     "horse", "sheep",     "cow",
+                                                   "elephant", "bear",  "zebra", "giraffe"};
+  return classes;
+}
+
 std::vector<int> classIdsOf(const std::vector<std::string>& wanted, const std::vector<std::string>& class_names,
                             const std::string& names_path) {
   std::vector<int> ids;
   for (const std::string& name : wanted) {
+    if (name == "coco-movable") {
+      for (const std::string& movable : cocoMovableClasses()) {
+        const auto it = std::find(class_names.begin(), class_names.end(), movable);
+        if (it != class_names.end()) ids.push_back(static_cast<int>(it - class_names.begin()));
+      }
+      continue;
+    }
     const auto it = std::find(class_names.begin(), class_names.end(), name);
     if (it == class_names.end())
-      throw InputError(names_path, 0, "has no class '" + name + "' (check --dynamic-classes)");
+      throw InputError(names_path, 0, "has no class '" + name + "' (check --dynamic-classes and --moving-classes)");
     ids.push_back(static_cast<int>(it - class_names.begin()));
   }
   return ids;

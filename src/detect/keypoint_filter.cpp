@@ -130,4 +130,14 @@ BoxExtractor orbBoxExtractor(const OrbExtractor& extractor, const ImagePyramid& 
   };
 }
 
+BoxExtractor cornerBoxExtractor(const OrbExtractor& extractor, const ImagePyramid& pyramid, OrbCorners& corners,
+                                int features_per_box, int* frame_winners) {
+  return [&extractor, &pyramid, &corners, features_per_box, frame_winners](
+             const cv::Rect& box, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) {
+    int reused = 0;
+    extractor.extractFromCorners(pyramid, corners, box, features_per_box, keypoints, descriptors, &reused);
+    if (frame_winners) *frame_winners += reused;
+  };
+}
+
 }  // namespace vslam

@@ -21,10 +21,7 @@ namespace {
 constexpr int kFastMargin = 4;  // FAST's circle radius (3) + 1 so non-max suppression sees all neighbours
 
 // A candidate corner in level pixels, with its level-0 position.
-struct Corner {
-  cv::KeyPoint keypoint;  // in level coordinates
-  cv::Point2f level0;
-};
+using Corner = OrbCorner;
 
 // Level-0 position of a level pixel. cv::resize (INTER_LINEAR) maps pixel
 // centres, x_prev + 0.5 = (x + 0.5) * W_prev / W, and these ratios chain, so
@@ -313,10 +310,46 @@ ImagePyramid OrbExtractor::buildPyramid(const cv::Mat& image) const {
   return pyramid;
 }
 
+cv::Rect OrbExtractor::levelRegion(const ImagePyramid& pyramid, int level_index, const cv::Rect& area) const {
+  const cv::Mat& base = pyramid.levels[0];
+  const cv::Mat& level = pyramid.levels[level_index];
+  const double ratio_x = static_cast<double>(base.cols) / level.cols;
+  const double ratio_y = static_cast<double>(base.rows) / level.rows;
+  // The area in level pixels (inverse of toLevel0, rounded outwards), inside the border.
+  const int x0 = static_cast<int>(std::floor((area.x + 0.5) / ratio_x - 0.5));
+  const int y0 = static_cast<int>(std::floor((area.y + 0.5) / ratio_y - 0.5));
+  const int x1 = static_cast<int>(std::ceil((area.x + area.width - 0.5) / ratio_x - 0.5)) + 1;
+  const int y1 = static_cast<int>(std::ceil((area.y + area.height - 0.5) / ratio_y - 0.5)) + 1;
+  const cv::Rect inner(kEdgeBorder, kEdgeBorder, level.cols - 2 * kEdgeBorder, level.rows - 2 * kEdgeBorder);
+  return cv::Rect(cv::Point(x0, y0), cv::Point(x1, y1)) & inner;
+}
+
+void OrbExtractor::orient(const ImagePyramid& pyramid, int level, OrbCorner& corner) const {
+  cv::KeyPoint& kp = corner.keypoint;
+  kp.octave = level;
+  kp.size = static_cast<float>(2 * kPatchRadius + 1) * static_cast<float>(scale_factors_[level]);
+  kp.angle = centroidAngle(pyramid.levels[level], cv::Point(cvRound(kp.pt.x), cvRound(kp.pt.y)), circle_half_width_);
+}
+
+void OrbExtractor::describe(const ImagePyramid& pyramid, const std::vector<OrbCorner>& kept,
+                            std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) const {
+  descriptors.create(static_cast<int>(kept.size()), kOrbDescriptorBytes, CV_8U);
+  keypoints.reserve(kept.size());
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    const cv::KeyPoint& kp = kept[i].keypoint;
+    computeDescriptor(pyramid.blurred[kp.octave], cv::Point(cvRound(kp.pt.x), cvRound(kp.pt.y)), kp.angle,
+                      pattern_x_.data(), pattern_y_.data(), descriptors.ptr<uchar>(static_cast<int>(i)));
+    cv::KeyPoint out = kp;
+    out.pt = kept[i].level0;
+    keypoints.push_back(out);
+  }
+}
+
 void OrbExtractor::extract(const ImagePyramid& pyramid, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors,
-                           const cv::Rect& roi, int n_features) const {
+                           const cv::Rect& roi, int n_features, OrbCorners* all_corners) const {
   keypoints.clear();
   descriptors = cv::Mat();
+  if (all_corners) all_corners->levels.assign(params_.n_levels, {});
   if (pyramid.levels.empty() || pyramid.levels[0].empty()) return;
   if (static_cast<int>(pyramid.levels.size()) != params_.n_levels ||
       static_cast<int>(pyramid.blurred.size()) != params_.n_levels)
@@ -337,13 +370,7 @@ void OrbExtractor::extract(const ImagePyramid& pyramid, std::vector<cv::KeyPoint
     const cv::Mat& level = pyramid.levels[l];
     const double ratio_x = static_cast<double>(base.cols) / level.cols;
     const double ratio_y = static_cast<double>(base.rows) / level.rows;
-    // The area in level pixels (inverse of toLevel0, rounded outwards), inside the border.
-    const int x0 = static_cast<int>(std::floor((area.x + 0.5) / ratio_x - 0.5));
-    const int y0 = static_cast<int>(std::floor((area.y + 0.5) / ratio_y - 0.5));
-    const int x1 = static_cast<int>(std::ceil((area.x + area.width - 0.5) / ratio_x - 0.5)) + 1;
-    const int y1 = static_cast<int>(std::ceil((area.y + area.height - 0.5) / ratio_y - 0.5)) + 1;
-    const cv::Rect inner(kEdgeBorder, kEdgeBorder, level.cols - 2 * kEdgeBorder, level.rows - 2 * kEdgeBorder);
-    const cv::Rect region = cv::Rect(cv::Point(x0, y0), cv::Point(x1, y1)) & inner;
+    const cv::Rect region = levelRegion(pyramid, l, area);
     const int quota = quotas[l] + carried;
     if (region.width <= 0 || region.height <= 0) {
       carried = quota;
@@ -356,31 +383,72 @@ void OrbExtractor::extract(const ImagePyramid& pyramid, std::vector<cv::KeyPoint
       const cv::Point2f p0 = toLevel0(kp.pt, ratio_x, ratio_y);
       // Exact ROI test in level-0 coordinates (the level region was rounded outwards).
       if (p0.x < area.x || p0.y < area.y || p0.x >= area.x + area.width || p0.y >= area.y + area.height) continue;
-      candidates.push_back(Corner{kp, p0});
+      candidates.push_back(Corner{kp, p0, false});
     }
     const std::vector<int> selected = distributeQuadtree(candidates, cv::Rect2f(region), quota);
-    for (int index : selected) kept.push_back(candidates[index]);
-    carried = quota - static_cast<int>(selected.size());
-
-    const float size = static_cast<float>(2 * kPatchRadius + 1) * static_cast<float>(scale_factors_[l]);
-    for (std::size_t i = kept.size() - selected.size(); i < kept.size(); ++i) {
-      cv::KeyPoint& kp = kept[i].keypoint;
-      kp.octave = l;
-      kp.size = size;
-      kp.angle = centroidAngle(level, cv::Point(cvRound(kp.pt.x), cvRound(kp.pt.y)), circle_half_width_);
+    for (int index : selected) {
+      kept.push_back(candidates[index]);
+      orient(pyramid, l, kept.back());
+      candidates[index].in_frame = true;
     }
+    carried = quota - static_cast<int>(selected.size());
+    if (all_corners) all_corners->levels[l] = candidates;
   }
+  describe(pyramid, kept, keypoints, descriptors);
+}
 
-  descriptors.create(static_cast<int>(kept.size()), kOrbDescriptorBytes, CV_8U);
-  keypoints.reserve(kept.size());
-  for (std::size_t i = 0; i < kept.size(); ++i) {
-    const cv::KeyPoint& kp = kept[i].keypoint;
-    computeDescriptor(pyramid.blurred[kp.octave], cv::Point(cvRound(kp.pt.x), cvRound(kp.pt.y)), kp.angle,
-                      pattern_x_.data(), pattern_y_.data(), descriptors.ptr<uchar>(static_cast<int>(i)));
-    cv::KeyPoint out = kp;
-    out.pt = kept[i].level0;
-    keypoints.push_back(out);
+void OrbExtractor::extractFromCorners(const ImagePyramid& pyramid, OrbCorners& corners, const cv::Rect& roi,
+                                      int n_features, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors,
+                                      int* frame_winners) const {
+  keypoints.clear();
+  descriptors = cv::Mat();
+  if (frame_winners) *frame_winners = 0;
+  if (pyramid.levels.empty() || pyramid.levels[0].empty()) return;
+  if (static_cast<int>(corners.levels.size()) != params_.n_levels)
+    throw InputError("OrbExtractor::extractFromCorners: corners were not kept by extract with these parameters");
+  const cv::Rect image_rect(0, 0, pyramid.levels[0].cols, pyramid.levels[0].rows);
+  const cv::Rect area = roi & image_rect;
+  if (area.empty() || n_features <= 0) return;
+  const std::vector<int> quotas = levelQuotas(n_features);
+
+  std::vector<Corner> added;
+  std::vector<Corner> candidates;
+  std::vector<int> candidate_index;  // into corners.levels[l]
+  int carried = 0;
+  for (int l = 0; l < params_.n_levels; ++l) {
+    const cv::Rect region = levelRegion(pyramid, l, area);
+    const int quota = quotas[l] + carried;
+    if (region.width <= 0 || region.height <= 0) {
+      carried = quota;
+      continue;
+    }
+    // The frame's corners inside the ROI, in the frame's scan order: the
+    // quadtree then sees what a FAST run over the ROI would have found with
+    // the frame's cells (it does not re-run FAST in cells empty at ROI scale).
+    candidates.clear();
+    candidate_index.clear();
+    for (int i = 0; i < static_cast<int>(corners.levels[l].size()); ++i) {
+      const Corner& corner = corners.levels[l][i];
+      const cv::Point2f& p0 = corner.level0;
+      if (p0.x < area.x || p0.y < area.y || p0.x >= area.x + area.width || p0.y >= area.y + area.height) continue;
+      if (!region.contains(cv::Point(static_cast<int>(corner.keypoint.pt.x), static_cast<int>(corner.keypoint.pt.y))))
+        continue;
+      candidates.push_back(corner);
+      candidate_index.push_back(i);
+    }
+    const std::vector<int> selected = distributeQuadtree(candidates, cv::Rect2f(region), quota);
+    for (int index : selected) {
+      if (candidates[index].in_frame) {
+        if (frame_winners) ++*frame_winners;
+        continue;
+      }
+      added.push_back(candidates[index]);
+      orient(pyramid, l, added.back());
+      corners.levels[l][candidate_index[index]].in_frame = true;
+    }
+    carried = quota - static_cast<int>(selected.size());
   }
+  describe(pyramid, added, keypoints, descriptors);
 }
 
 void OrbExtractor::describe(const cv::Mat& blurred_level, const std::vector<cv::KeyPoint>& level_keypoints,

@@ -1,6 +1,7 @@
 #include "vslam/map/map.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
 namespace vslam {
 
@@ -11,6 +12,21 @@ KeyFrame* Map::createKeyFrame(const Frame& frame) {
 
 MapPoint* Map::createMapPoint(const Vec3& position_w, KeyFrame* reference) {
   map_points_.push_back(std::make_unique<MapPoint>(next_map_point_id_++, position_w, reference, reference->id()));
+  return map_points_.back().get();
+}
+
+KeyFrame* Map::restoreKeyFrame(long id, const Frame& frame) {
+  // keyFrameById's binary search needs the keyframes in id order.
+  if (id < next_keyframe_id_) throw std::logic_error("Map::restoreKeyFrame: keyframe ids must increase");
+  keyframes_.push_back(std::make_unique<KeyFrame>(id, frame));
+  next_keyframe_id_ = id + 1;
+  return keyframes_.back().get();
+}
+
+MapPoint* Map::restoreMapPoint(long id, const Vec3& position_w, KeyFrame* reference, long first_keyframe_id) {
+  if (id < next_map_point_id_) throw std::logic_error("Map::restoreMapPoint: map point ids must increase");
+  map_points_.push_back(std::make_unique<MapPoint>(id, position_w, reference, first_keyframe_id));
+  next_map_point_id_ = id + 1;
   return map_points_.back().get();
 }
 

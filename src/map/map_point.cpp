@@ -21,6 +21,34 @@ void MapPoint::addObservation(KeyFrame* keyframe, int keypoint) {
   observation_weight_ += keyframe->observationWeight(keypoint);
 }
 
+MapPoint::SavedState MapPoint::savedState() const {
+  SavedState state;
+  state.descriptor = descriptor_;
+  state.normal = normal_;
+  state.min_distance = min_distance_;
+  state.max_distance = max_distance_;
+  state.visible = visible_;
+  state.found = found_;
+  state.class_id = class_id_;
+  state.class_confidence = class_confidence_;
+  state.colour = colour_;
+  state.confirmed_min_observations = confirmed_min_observations_;
+  return state;
+}
+
+void MapPoint::restoreState(const SavedState& state) {
+  descriptor_ = state.descriptor.clone();
+  normal_ = state.normal;
+  min_distance_ = state.min_distance;
+  max_distance_ = state.max_distance;
+  visible_ = state.visible;
+  found_ = state.found;
+  class_id_ = state.class_id;
+  class_confidence_ = state.class_confidence;
+  colour_ = state.colour;
+  confirmed_min_observations_ = state.confirmed_min_observations;
+}
+
 void MapPoint::eraseObservation(KeyFrame* keyframe) {
   auto it = observations_.find(keyframe);
   if (it == observations_.end()) return;

@@ -2,6 +2,7 @@
 
 #include <GL/gl.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -13,6 +14,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "vslam/core/error.hpp"
 #include "vslam/io/trajectory_io.hpp"
 #include "vslam/render/osmesa_context.hpp"
 
@@ -67,6 +69,22 @@ cv::Mat drawPanelTexture(int size, cv::RNG& rng) {
                  colour(), rng.uniform(2, 6), cv::LINE_AA);
     }
   }
+  return texture;
+}
+
+// A mipmapped, edge-clamped GL texture of a BGR image; returns its name.
+GLuint uploadTexture(const cv::Mat& bgr) {
+  cv::Mat rgb;
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  GLuint texture = 0;
+  glGenTextures(1, &texture);
+  glBindTexture(GL_TEXTURE_2D, texture);
+  glTexParameteri(GL_TEXTURE_2D, GL_GENERATE_MIPMAP, GL_TRUE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, rgb.cols, rgb.rows, 0, GL_RGB, GL_UNSIGNED_BYTE, rgb.data);
   return texture;
 }
 
@@ -146,27 +164,60 @@ PinholeCamera RoomLoopParams::defaultCamera() {
   return camera;
 }
 
+namespace {
+
+// The camera's pose at frame k of the circle.
+StampedPose roomLoopPose(const RoomLoopParams& params, int k) {
+  const double total_angle = 2.0 * M_PI * params.turns;
+  const double angle = params.frames > 1 ? total_angle * k / (params.frames - 1) : 0.0;
+  const Vec3 outward(std::cos(angle), 0.0, std::sin(angle));
+  const Vec3 centre = params.path_radius_m * outward + Vec3(0.0, params.bob_m * std::sin(2.0 * angle), 0.0);
+  // Camera axes in the world: z looks outwards, y is down, x = y cross z.
+  Mat3 R_wc;
+  R_wc.col(2) = outward;
+  R_wc.col(1) = Vec3(0.0, 1.0, 0.0);
+  R_wc.col(0) = R_wc.col(1).cross(R_wc.col(2));
+  return {params.start_time_s + k / params.camera.fps, SE3(R_wc, centre)};
+}
+
+}  // namespace
+
 std::vector<StampedPose> roomLoopPath(const RoomLoopParams& params) {
   std::vector<StampedPose> path;
-  const double total_angle = 2.0 * M_PI * params.turns;
-  for (int k = 0; k < params.frames; ++k) {
-    const double angle = params.frames > 1 ? total_angle * k / (params.frames - 1) : 0.0;
-    const Vec3 outward(std::cos(angle), 0.0, std::sin(angle));
-    const Vec3 centre = params.path_radius_m * outward + Vec3(0.0, params.bob_m * std::sin(2.0 * angle), 0.0);
-    // Camera axes in the world: z looks outwards, y is down, x = y cross z.
-    Mat3 R_wc;
-    R_wc.col(2) = outward;
-    R_wc.col(1) = Vec3(0.0, 1.0, 0.0);
-    R_wc.col(0) = R_wc.col(1).cross(R_wc.col(2));
-    path.push_back({params.start_time_s + k / params.camera.fps, SE3(R_wc, centre)});
-  }
+  for (int k = 0; k < params.frames; ++k) path.push_back(roomLoopPose(params, k));
   return path;
+}
+
+std::array<Vec3, 4> movingObjectCorners(const RoomLoopParams& params, int frame, double aspect) {
+  const int first = params.moving_object_first_frame;
+  const int crossing = std::max(1, params.moving_object_frames);
+  const int last = params.frames - 1;
+  // Where it is in its crossing, held at either end.
+  const int k = std::clamp(std::clamp(frame, first, first + crossing), 0, std::max(last, 0));
+  const double progress = static_cast<double>(k - first) / crossing;
+  // The camera's heading at that frame (so the object keeps in view while the
+  // camera turns), plus a bearing that sweeps across the view.
+  const Vec3 view = roomLoopPose(params, k).T_wc.R.col(2);
+  const double heading = std::atan2(view.z(), view.x());
+  const double bearing = (0.5 - progress) * params.moving_object_sweep_deg * M_PI / 180.0;
+  const double angle = heading + bearing;
+  const Vec3 outward(std::cos(angle), 0.0, std::sin(angle));
+  const Vec3 centre = params.moving_object_radius_m * outward;
+  // Upright, facing the room's centre: right-hand edge along y x outward.
+  const Vec3 across = Vec3(0.0, 1.0, 0.0).cross(outward).normalized();
+  const double half_width = 0.5 * params.moving_object_width_m;
+  const double half_height = 0.5 * params.moving_object_width_m * aspect;
+  const Vec3 up(0.0, -1.0, 0.0);  // y is down
+  return {centre - across * half_width + up * half_height, centre + across * half_width + up * half_height,
+          centre + across * half_width - up * half_height, centre - across * half_width - up * half_height};
 }
 
 struct RoomLoopRenderer::Scene {
   RoomLoopParams params;
   OsmesaContext context;
   std::vector<Panel> panels;
+  Panel moving_object;  // texture 0 when there is none
+  double moving_object_aspect = 1.0;
 
   explicit Scene(const RoomLoopParams& p)
       : params(p), context(p.camera.width * kSupersampling, p.camera.height * kSupersampling) {}
@@ -187,24 +238,27 @@ RoomLoopRenderer::RoomLoopRenderer(const RoomLoopParams& params) : scene_(std::m
 
   cv::RNG rng(params.seed);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  for (Panel& panel : panels) {
-    cv::Mat rgb;
-    cv::cvtColor(drawPanelTexture(params.texture_px, rng), rgb, cv::COLOR_BGR2RGB);
-    glGenTextures(1, &panel.texture);
-    glBindTexture(GL_TEXTURE_2D, panel.texture);
-    glTexParameteri(GL_TEXTURE_2D, GL_GENERATE_MIPMAP, GL_TRUE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, rgb.cols, rgb.rows, 0, GL_RGB, GL_UNSIGNED_BYTE, rgb.data);
+  for (Panel& panel : panels) panel.texture = uploadTexture(drawPanelTexture(params.texture_px, rng));
+  if (!params.moving_object_image.empty()) {
+    const cv::Mat image = cv::imread(params.moving_object_image, cv::IMREAD_COLOR);
+    if (image.empty())
+      throw InputError(params.moving_object_image + ": not a readable image (the moving object's picture)");
+    scene_->moving_object_aspect = static_cast<double>(image.rows) / image.cols;
+    scene_->moving_object.texture = uploadTexture(image);
+    setFrame(0);
   }
   if (glGetError() != GL_NO_ERROR) throw std::runtime_error("RoomLoopRenderer: OpenGL refused the panel textures");
+}
+
+void RoomLoopRenderer::setFrame(int frame) {
+  if (scene_->moving_object.texture == 0) return;
+  scene_->moving_object.corners = movingObjectCorners(scene_->params, frame, scene_->moving_object_aspect);
 }
 
 RoomLoopRenderer::~RoomLoopRenderer() {
   scene_->context.makeCurrent();
   for (Panel& panel : scene_->panels) glDeleteTextures(1, &panel.texture);
+  if (scene_->moving_object.texture != 0) glDeleteTextures(1, &scene_->moving_object.texture);
 }
 
 cv::Mat RoomLoopRenderer::render(const SE3& T_wc) {
@@ -218,6 +272,7 @@ cv::Mat RoomLoopRenderer::render(const SE3& T_wc) {
   glDisable(GL_CULL_FACE);
   loadCamera(camera, kSupersampling, T_wc);
   drawPanels(scene_->panels, true);
+  if (scene_->moving_object.texture != 0) drawPanels({scene_->moving_object}, true);
 
   cv::Mat drawn = context.readPixels();
   cv::Mat image;
@@ -236,6 +291,7 @@ cv::Mat RoomLoopRenderer::renderDepth(const SE3& T_wc) {
   glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
   loadCamera(camera, 1.0, T_wc);
   drawPanels(scene_->panels, false);
+  if (scene_->moving_object.texture != 0) drawPanels({scene_->moving_object}, false);
   glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   const cv::Mat window_depth = context.readDepth(camera.width, camera.height);
 
@@ -282,7 +338,14 @@ void writeRoomLoopSequence(const RoomLoopParams& params, const std::string& fold
            << params.seed << "\n# timestamp filename\n";
   depth_list << "# synthetic room loop: camera z in metres times " << params.camera.depth_factor
              << ", 0 = nothing drawn\n# timestamp filename\n";
+  std::ofstream object_list;
+  if (!params.moving_object_image.empty()) {
+    object_list.open(root / "moving_object.txt");
+    if (!object_list) throw std::runtime_error("cannot write " + (root / "moving_object.txt").string());
+    object_list << "# the moving billboard (" << params.moving_object_image << "): timestamp, centre x y z (m)\n";
+  }
   for (size_t k = 0; k < path.size(); ++k) {
+    renderer.setFrame(static_cast<int>(k));
     char stamp[32];
     std::snprintf(stamp, sizeof stamp, "%.6f", path[k].timestamp);
     // The same timestamp for both, so the TUM association pairs every frame exactly.
@@ -294,6 +357,12 @@ void writeRoomLoopSequence(const RoomLoopParams& params, const std::string& fold
     if (!cv::imwrite((root / depth_name).string(), depth))
       throw std::runtime_error("cannot write " + (root / depth_name).string());
     rgb_list << stamp << " " << rgb_name << "\n";
+    if (object_list.is_open()) {
+      // The centre does not depend on the billboard's aspect ratio.
+      const std::array<Vec3, 4> corners = movingObjectCorners(params, static_cast<int>(k), 1.0);
+      const Vec3 centre = 0.25 * (corners[0] + corners[1] + corners[2] + corners[3]);
+      object_list << stamp << " " << centre.x() << " " << centre.y() << " " << centre.z() << "\n";
+    }
     depth_list << stamp << " " << depth_name << "\n";
     if (progress) progress(static_cast<int>(k + 1), static_cast<int>(path.size()));
   }

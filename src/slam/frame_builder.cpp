@@ -6,10 +6,17 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "vslam/slam/moving_objects.hpp"
+
 namespace vslam {
 
-FrameBuilder::FrameBuilder(const Config& config, const PinholeCamera& camera, std::vector<int> dynamic_class_ids)
-    : config_(config), camera_(camera), extractor_(config.orb), dynamic_class_ids_(std::move(dynamic_class_ids)) {
+FrameBuilder::FrameBuilder(const Config& config, const PinholeCamera& camera, std::vector<int> dynamic_class_ids,
+                           std::vector<int> moving_class_ids)
+    : config_(config),
+      camera_(camera),
+      extractor_(config.orb),
+      dynamic_class_ids_(std::move(dynamic_class_ids)),
+      moving_class_ids_(std::move(moving_class_ids)) {
   pyramid_.levels = extractor_.levels();
   pyramid_.scale_factor = config.orb.scale_factor;
   pyramid_.scale = extractor_.scaleFactors();
@@ -48,6 +55,14 @@ void FrameBuilder::sampleDepth(const cv::Mat& depth_m, Frame& frame) const {
 Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m,
                           int n_features, const std::vector<Detection>* detections,
                           FrameFilterResult* filter) const {
+  BoxSource boxes;
+  if (detections) boxes = [detections](const FeatureSnapshot&) { return *detections; };
+  return build(id, index, timestamp, bgr, depth_m, n_features, boxes, filter, nullptr);
+}
+
+Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m,
+                          int n_features, const BoxSource& boxes, FrameFilterResult* filter,
+                          FeatureSnapshot* own_features) const {
   Frame frame;
   frame.id = id;
   frame.index = index;
@@ -61,20 +76,32 @@ Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& b
   else
     gray = bgr;
   const ImagePyramid image_pyramid = extractor_.buildPyramid(gray);
-  extractor_.extract(image_pyramid, frame.keypoints, frame.descriptors, cv::Rect(), n_features);
-  if (detections) {
+  const bool reuse_corners = boxes && config_.detector.box_filter == "reuse";
+  OrbCorners corners;
+  extractor_.extract(image_pyramid, frame.keypoints, frame.descriptors, cv::Rect(), n_features,
+                     reuse_corners ? &corners : nullptr);
+  // A copy: the boxes are carried by these after the filter has changed the frame's own.
+  const FeatureSnapshot own{index, frame.keypoints, frame.descriptors.clone()};
+  if (own_features) *own_features = own;
+  if (boxes) {
+    const std::vector<Detection> detections = boxes(own);
     const auto start = std::chrono::steady_clock::now();
     // Per box: the configured count (or the frame's), on the same pyramid, as Algorithm 1 asks.
     const int per_box = featuresPerBox(config_.detector, config_.orb);
+    int reused = 0;
+    const BoxExtractor extract_in_box = reuse_corners
+                                            ? cornerBoxExtractor(extractor_, image_pyramid, corners, per_box, &reused)
+                                            : orbBoxExtractor(extractor_, image_pyramid, per_box);
     std::vector<KeypointLabel> labels;
     const KeypointFilterStats stats =
-        applyKeypointFilter(gray.size(), *detections, config_.detector.min_box_px, dynamic_class_ids_,
-                            orbBoxExtractor(extractor_, image_pyramid, per_box), frame.keypoints, frame.descriptors,
-                            labels);
+        applyKeypointFilter(gray.size(), detections, config_.detector.min_box_px, dynamic_class_ids_, extract_in_box,
+                            frame.keypoints, frame.descriptors, labels);
     frame.labels.resize(labels.size());
     for (size_t i = 0; i < labels.size(); ++i) frame.labels[i] = {labels[i].class_id, labels[i].detection_id};
+    labelMovableKeypoints(detections, moving_class_ids_, frame);
     if (filter) {
       filter->stats = stats;
+      filter->frame_keypoints_reused = reused;
       filter->ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     }
   }

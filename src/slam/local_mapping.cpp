@@ -297,6 +297,15 @@ void LocalMapping::cullRecentMapPoints(KeyFrame* keyframe) {
   }
 }
 
+// A keypoint its frame's motion check put on a moving object makes no map point.
+static bool onMovingObjectAt(const KeyFrame& keyframe, int index) {
+  return keyframe.labels.size() == keyframe.size() && onMovingObject(keyframe.labels[index]);
+}
+
+static bool mayMoveAt(const KeyFrame& keyframe, int index) {
+  return keyframe.labels.size() == keyframe.size() && keyframe.labels[index].motion != ObjectMotion::NotMovable;
+}
+
 void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
   const PinholeCamera& camera = keyframe->camera();
   const ScalePyramid& pyramid = keyframe->pyramid();
@@ -323,6 +332,7 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
     P1 << T1.R, T1.t;
     P2 << T2.R, T2.t;
     for (const auto& [i1, i2] : matches) {
+      if (onMovingObjectAt(*keyframe, i1) || onMovingObjectAt(*neighbour, i2)) continue;
       const cv::KeyPoint& kp1 = keyframe->keypoints[i1];
       const cv::KeyPoint& kp2 = neighbour->keypoints[i2];
       const Vec3 xn1 = K_inv * keyframe->point(i1).homogeneous();
@@ -332,7 +342,10 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
       const double parallax_cos = ray1.dot(ray2) / (ray1.norm() * ray2.norm());
       // The parallax a keypoint's depth gives on its own: the angle its
       // virtual stereo pair subtends (cos 2 > any ray parallax: no depth).
-      const bool depth1 = keyframe->hasDepth(i1), depth2 = neighbour->hasDepth(i2);
+      // On an object that may move, depth alone would make a point of a walking
+      // person at once: there only the two views' parallax may place a point.
+      const bool movable = mayMoveAt(*keyframe, i1) || mayMoveAt(*neighbour, i2);
+      const bool depth1 = !movable && keyframe->hasDepth(i1), depth2 = !movable && neighbour->hasDepth(i2);
       const double stereo_cos1 = depth1 ? std::cos(2 * std::atan2(baseline / 2, keyframe->depth[i1])) : 2.0;
       const double stereo_cos2 = depth2 ? std::cos(2 * std::atan2(baseline / 2, neighbour->depth[i2])) : 2.0;
       const double stereo_cos = std::min(stereo_cos1, stereo_cos2);

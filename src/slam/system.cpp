@@ -6,6 +6,7 @@
 
 #include "vslam/detect/detection_stage.hpp"
 #include "vslam/map/map.hpp"
+#include "vslam/map_io/map_database.hpp"
 #include "vslam/place/keyframe_database.hpp"
 #include "vslam/place/vocabulary.hpp"
 #include "vslam/slam/frame_builder.hpp"
@@ -19,9 +20,10 @@ System::System(const Config& config, const SystemOptions& options)
     : config_(config),
       options_(options),
       map_(std::make_unique<Map>()),
-      detection_(makeDetectionStage(config.detector, &timer_)),
-      frame_builder_(std::make_unique<FrameBuilder>(config, config.camera,
-                                                    detection_ ? detection_->dynamicClassIds() : std::vector<int>())),
+      detection_(makeDetectionStage(config.detector, &timer_, options.deterministic)),
+      frame_builder_(std::make_unique<FrameBuilder>(
+          config, config.camera, detection_ ? detection_->dynamicClassIds() : std::vector<int>(),
+          detection_ ? detection_->movingClassIds() : std::vector<int>())),
       local_mapping_(std::make_unique<LocalMapping>(config, *map_, &timer_)),
       tracking_(std::make_unique<Tracking>(config, *map_, *local_mapping_, &timer_,
                                            options.deterministic ? KeyFrameInsertion::Synchronous
@@ -30,7 +32,8 @@ System::System(const Config& config, const SystemOptions& options)
   if (options_.after_keyframe_mapped) local_mapping_->setAfterKeyFrameHook(options_.after_keyframe_mapped);
   // An empty vocabulary path switches place recognition off; a bad file is an input error.
   if (!config_.loop.vocabulary.empty()) {
-    vocabulary_ = std::make_unique<Vocabulary>(Vocabulary::load(resolveVocabularyPath(config_.loop.vocabulary)));
+    vocabulary_path_ = resolveVocabularyPath(config_.loop.vocabulary);
+    vocabulary_ = std::make_unique<Vocabulary>(Vocabulary::load(vocabulary_path_));
     database_ = std::make_unique<KeyframeDatabase>();
     if (config_.loop.enabled)
       loop_closing_ =
@@ -75,22 +78,20 @@ LoopClosingState System::loopClosingState() const {
 }
 
 void System::submitAhead(int index, const cv::Mat& image) {
-  if (!detection_ || detection_submitted_.count(index)) return;
-  detection_->submit(index, image);
-  detection_submitted_.insert(index);
+  if (detection_) detection_->submitAhead(index, image);
 }
 
 bool System::processFrame(int index, double timestamp, const cv::Mat& image, const cv::Mat& depth_m) {
   ScopedStage total(&timer_, "frame");
-  std::vector<Detection> detections;
-  if (detection_) {
-    ScopedStage wait(&timer_, "detect_wait");
-    if (!detection_submitted_.count(index)) detection_->submit(index, image);
-    detection_submitted_.erase(index);
-    detections = detection_->wait(index);
-  }
+  BoxSource boxes;
+  if (detection_)
+    boxes = [&](const FeatureSnapshot& own) {
+      ScopedStage wait(&timer_, "detect_wait");
+      return detection_->boxesFor(own, image);
+    };
   Frame frame;
   FrameFilterResult filter;
+  FeatureSnapshot own_features;
   {
     ScopedStage stage(&timer_, "extract");
     // Monocular initialisation matches only the finest level: extract twice the
@@ -98,21 +99,25 @@ bool System::processFrame(int index, double timestamp, const cv::Mat& image, con
     const bool initialising =
         tracking_->state() == TrackingState::NotInitialized && config_.sensor == SensorMode::Monocular;
     const int n_features = initialising ? 2 * config_.orb.n_features : -1;
-    frame = frame_builder_->build(next_frame_id_++, index, timestamp, image, depth_m, n_features,
-                                  detection_ ? &detections : nullptr, &filter);
+    frame = frame_builder_->build(next_frame_id_++, index, timestamp, image, depth_m, n_features, boxes, &filter,
+                                  detection_ ? &own_features : nullptr);
   }
   if (detection_) {
     timer_.record("filter", filter.ms);
+    keypoints_reused_.push_back(filter.frame_keypoints_reused);
+    duplicates_dropped_.push_back(filter.stats.duplicates_dropped);
     keypoints_added_.push_back(filter.stats.keypoints_added);
     keypoints_removed_.push_back(filter.stats.keypoints_removed_dynamic);
     boxes_used_.push_back(filter.stats.boxes_used);
   }
   if (config_.sensor == SensorMode::RgbD && !frame.hasDepthImage()) ++frames_without_depth_;
   bool tracked;
+  const int keyframes_before = tracking_->keyframesCreated();
   {
     ScopedStage stage(&timer_, "track");
     tracked = tracking_->track(frame);
   }
+  if (detection_) detection_->afterTrack(own_features, image, tracking_->keyframesCreated() > keyframes_before);
   // Deterministic mode: loop closing runs synchronously after each frame's mapping.
   if (options_.deterministic && loop_closing_) loop_closing_->processQueued();
   rethrowWorkerFailure();
@@ -130,7 +135,8 @@ bool System::finish(const FinishOptions& finish_options) {
     if (loop_closing_) loop_closing_->finish();
   }
   rethrowWorkerFailure();
-  if (!config_.loop.final_ba || !finish_options.final_ba || tracking_->state() == TrackingState::NotInitialized)
+  if (!config_.loop.final_ba || !finish_options.final_ba || tracking_->state() == TrackingState::NotInitialized ||
+      localize_)
     return false;
   frames_before_final_ba_ = frameTrajectory();
   keyframes_before_final_ba_ = keyframeTrajectory();
@@ -213,7 +219,19 @@ SystemStats System::stats() const {
   stats.map_resets = tracking_->mapResets();
   stats.keyframe_waits = tracking_->keyframeWaits();
   stats.frames_without_depth = frames_without_depth_;
+  const Tracking::MovingObjectStats& moving = tracking_->movingObjectStats();
+  stats.moving_boxes_checked = moving.boxes_checked;
+  stats.moving_boxes_moving = moving.moving;
+  stats.moving_boxes_parked = moving.parked;
+  stats.moving_boxes_undecided = moving.undecided;
+  stats.moving_points_retired = moving.points_retired;
   if (loop_closing_) stats.implausible_loops_rejected = loop_closing_->implausibleLoopsRejected();
+  if (loaded_max_keyframe_id_ >= 0) {
+    stats.frames_in_loaded_map = 0;
+    for (const FrameRecord& record : tracking_->records())
+      if (record.tracked && record.reference && record.reference->id() <= loaded_max_keyframe_id_)
+        ++stats.frames_in_loaded_map;
+  }
   return stats;
 }
 
@@ -230,6 +248,18 @@ DetectionSummary System::detectionSummary() const {
   summary.frames = static_cast<int>(keypoints_added_.size());
   summary.median_ms = percentile(timer_.samples("detect"), 0.5);
   summary.wait_median_ms = percentile(timer_.samples("detect_wait"), 0.5);
+  summary.detect_every = toString(detection_->params().detect_every);
+  summary.box_filter = detection_->params().box_filter;
+  const DetectionScheduleStats schedule = detection_->scheduleStats();
+  summary.network_frames = schedule.network_frames;
+  summary.fresh_frames = schedule.fresh_frames;
+  summary.carried_frames = schedule.carried_frames;
+  summary.box_age_median = percentile(std::vector<double>(schedule.ages.begin(), schedule.ages.end()), 0.5);
+  if (!schedule.carried_iou.empty()) summary.carried_iou_median = percentile(schedule.carried_iou, 0.5);
+  summary.boxes_expired = schedule.expired;
+  summary.boxes_unmoved = schedule.unmoved;
+  for (int reused : keypoints_reused_) summary.frame_keypoints_reused_total += reused;
+  for (int dropped : duplicates_dropped_) summary.duplicates_dropped_total += dropped;
   summary.keypoints_added_per_frame = median(keypoints_added_);
   summary.keypoints_removed_per_frame = median(keypoints_removed_);
   summary.boxes_used_per_frame = median(boxes_used_);
@@ -262,6 +292,49 @@ std::vector<ObjectLandmark> System::objectMap(const ObjectMapParams& params) con
   }
   const double link_distance = linkDistanceFor(percentile(std::move(depths), 0.5), params);
   return buildObjectMap(labelled, link_distance, params, detection_->classNames());
+}
+
+void System::saveMap(const std::string& path, const std::string& sequence) const {
+  MapFileHeader header;
+  header.mode = config_.sensor;
+  header.camera = config_.camera;
+  header.orb_levels = config_.orb.n_levels;
+  header.orb_scale_factor = config_.orb.scale_factor;
+  // Computed when first needed: a run that saves no map does not read the vocabulary twice.
+  header.vocabulary_checksum = vocabularyChecksum(vocabulary_path_);
+  header.vocabulary_file = vocabulary_path_.empty() ? "none" : vocabulary_path_;
+  header.sequence = sequence;
+  const std::vector<ObjectLandmark> objects = objectMap();  // takes the map lock itself
+  const std::vector<std::string> class_names = detection_ ? detection_->classNames() : std::vector<std::string>();
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  saveMapDatabase(path, *map_, header, objects, class_names);
+}
+
+std::pair<int, int> System::loadMap(const std::string& path, bool localize) {
+  if (next_frame_id_ > 0) throw std::logic_error("System::loadMap: only before the first frame");
+  const MapFileHeader header = readMapHeader(path);
+  MapRequirements required;
+  required.mode = config_.sensor;
+  required.camera = config_.camera;
+  required.orb_levels = config_.orb.n_levels;
+  required.orb_scale_factor = config_.orb.scale_factor;
+  required.vocabulary_checksum = vocabularyChecksum(vocabulary_path_);
+  checkMapCompatible(path, header, required);
+  std::pair<int, int> loaded;
+  {
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    loadMapDatabase(path, *map_, frame_builder_->camera(), frame_builder_->pyramid());
+    // Relocalisation and loop detection find the old keyframes by their bags of words.
+    for (KeyFrame* keyframe : map_->keyframes())
+      if (database_ && keyframe->hasBow()) database_->add(keyframe->id(), keyframe->bow);
+    loaded_max_keyframe_id_ = map_->maxKeyFrameId();
+    loaded = {static_cast<int>(map_->keyframeCount()), static_cast<int>(map_->mapPointCount())};
+  }
+  localize_ = localize;
+  tracking_->startInLoadedMap(localize);
+  spdlog::info("loaded map {}: {} keyframes, {} map points ({}{})", path, loaded.first, loaded.second,
+               header.sequence, localize ? "; localisation only" : "; mapping continues in it");
+  return loaded;
 }
 
 int System::lastTrackedPoints() const { return tracking_->lastTrackedPoints(); }

@@ -18,6 +18,7 @@
 #include "vslam/slam/local_mapping.hpp"
 #include "vslam/slam/loop_closing.hpp"
 #include "vslam/slam/map_matching.hpp"
+#include "vslam/slam/moving_objects.hpp"
 #include "vslam/slam/place_candidates.hpp"
 
 namespace vslam {
@@ -30,6 +31,7 @@ constexpr int kCloseUntrackedMany = 70;           // ...tracked < 100 and untrac
 constexpr int kNewKeyFrameMinDepthPoints = 100;   // a keyframe adds depth points up to at least this many
 constexpr double kRgbdLeavingMapRatio = 0.25;     // ORB-SLAM2's RGB-D c1c: tracked < 25 % of the reference's
 constexpr int kInitMinMatches = 100;
+constexpr int kMinStaticMatchesForPose = 20;  // fewer: objects that may move help the pose after all
 constexpr double kInitWindowPx = 100.0;
 constexpr double kProjectionRadiusPx = 15.0;  // monocular search window around the predicted position
 constexpr size_t kMaxLocalKeyFrames = 80;
@@ -52,6 +54,12 @@ bool keyFrameAllowedAfterRelocalisation(long frame_id, long last_relocalisation,
 Tracking::Tracking(const Config& config, Map& map, LocalMapping& local_mapping, StageTimer* timer,
                    KeyFrameInsertion insertion)
     : config_(config), map_(map), local_mapping_(local_mapping), timer_(timer), insertion_(insertion) {}
+
+void Tracking::startInLoadedMap(bool localization_only) {
+  map_loaded_ = true;
+  localization_only_ = localization_only;
+  state_ = TrackingState::Lost;  // the first frame relocalises in the loaded map
+}
 
 void Tracking::refreshLastFramePose() {
   if (!last_frame_ || !last_frame_->has_pose || records_.empty()) return;
@@ -121,7 +129,7 @@ bool Tracking::track(Frame& frame) {
       velocity_ = frame.T_cw * last_frame_->T_cw.inverse();
     else
       velocity_.reset();
-    if (needNewKeyFrame(frame)) {
+    if (!localization_only_ && needNewKeyFrame(frame)) {
       if (insertion_ == KeyFrameInsertion::WaitForMapping && !local_mapping_.acceptsKeyFrames()) {
         // Back-pressure: let Local Mapping finish the keyframe in hand. The map
         // may change meanwhile (local BA, culling, a loop correction), so the
@@ -161,7 +169,7 @@ bool Tracking::track(Frame& frame) {
   records_.push_back(record);
   // Early failure: a map just initialised (a few keyframes) is not worth
   // keeping. A larger map is kept while relocalisation can still succeed.
-  const bool reset = !ok && map_.keyframeCount() <= kResetMaxKeyFrames;
+  const bool reset = !ok && !map_loaded_ && map_.keyframeCount() <= kResetMaxKeyFrames;
   lock.unlock();
 
   if (insertion_ == KeyFrameInsertion::Synchronous) local_mapping_.processQueued();
@@ -365,9 +373,17 @@ int Tracking::optimisePose(Frame& frame) {
   std::vector<Vec3> points_w;
   std::vector<Observation2D> observations;
   std::vector<int> keypoint_of;
+  // Keypoints on objects that may move are left out while the static scene
+  // alone can give the pose (checkObjectMotion judges them afterwards).
+  const bool has_labels = frame.labels.size() == frame.size();
+  int static_matches = 0;
+  for (size_t i = 0; i < frame.size(); ++i)
+    if (frame.map_points[i] && (!has_labels || drivesPose(frame.labels[i]))) ++static_matches;
+  const bool static_only = static_matches >= kMinStaticMatchesForPose;
   for (size_t i = 0; i < frame.size(); ++i) {
     MapPoint* point = frame.map_points[i];
     if (!point) continue;
+    if (has_labels && (onMovingObject(frame.labels[i]) || (static_only && !drivesPose(frame.labels[i])))) continue;
     keypoint_of.push_back(static_cast<int>(i));
     // Keypoints with depth add the right coordinate: (u, v, u_R), 3-DOF chi-square.
     observations.push_back({static_cast<int>(points_w.size()), frame.point(i),
@@ -375,6 +391,11 @@ int Tracking::optimisePose(Frame& frame) {
     points_w.push_back(point->position());
   }
   frame.outlier.assign(frame.size(), false);
+  // Matches left out of the pose are not outliers of it; those on moving
+  // objects are dropped (discardOutliers), the undecided ones kept for the check.
+  if (has_labels)
+    for (size_t i = 0; i < frame.size(); ++i)
+      if (frame.map_points[i] && onMovingObject(frame.labels[i])) frame.outlier[i] = true;
   if (observations.size() < 3) return 0;
   const PoseOptimizationResult result =
       optimizePose(*frame.camera, frame.camera->bf, frame.T_cw, points_w, observations);
@@ -543,7 +564,7 @@ bool Tracking::trackLocalMap(Frame& frame) {
   for (size_t i = 0; i < frame.size(); ++i) {
     MapPoint* point = frame.map_points[i];
     if (!point) continue;
-    point->increaseVisible();
+    if (!localization_only_) point->increaseVisible();
     point->last_frame_seen = frame.id;
     point->track_in_view = false;
   }
@@ -551,7 +572,7 @@ bool Tracking::trackLocalMap(Frame& frame) {
   for (MapPoint* point : local_points_) {
     if (point->last_frame_seen == frame.id || point->isBad()) continue;
     if (isInFrustum(point, frame)) {
-      point->increaseVisible();
+      if (!localization_only_) point->increaseVisible();
       ++to_match;
     }
   }
@@ -562,18 +583,50 @@ bool Tracking::trackLocalMap(Frame& frame) {
   local_map_matches_ = static_cast<int>(std::count_if(frame.map_points.begin(), frame.map_points.end(),
                                                       [](const MapPoint* point) { return point != nullptr; }));
   optimisePose(frame);
+  if (frame.labels.size() == frame.size() && checkMovingObjects(frame)) optimisePose(frame);
 
   matches_inliers_ = 0;
   for (size_t i = 0; i < frame.size(); ++i) {
     MapPoint* point = frame.map_points[i];
     if (!point || frame.outlier[i]) continue;
-    point->increaseFound();
+    if (!localization_only_) point->increaseFound();
     if (point->observationCount() > 0) ++matches_inliers_;
   }
   const bool recently_relocalised =
       last_relocalisation_frame_id_ >= 0 &&
       frame.id < last_relocalisation_frame_id_ + config_.tracking.max_frames_between_keyframes;
   return matches_inliers_ >= (recently_relocalised ? 50 : config_.tracking.min_inliers);
+}
+
+bool Tracking::checkMovingObjects(Frame& frame) {
+  bool any_parked = false;
+  std::vector<bool> consistent;
+  for (const ObjectMotionVerdict& verdict : checkObjectMotion(frame, &consistent)) {
+    ++moving_object_stats_.boxes_checked;
+    if (verdict.motion == ObjectMotion::Parked) {
+      ++moving_object_stats_.parked;
+      any_parked = true;
+    } else if (verdict.motion == ObjectMotion::Moving) {
+      ++moving_object_stats_.moving;
+    } else {
+      ++moving_object_stats_.undecided;
+    }
+  }
+  // A moving instance's map points were made while it stood still (or on an
+  // earlier, wrong verdict): the object has moved on, so they are retired.
+  // Matches that agree with the pose (the static scene seen past the object)
+  // are only let go.
+  for (size_t i = 0; i < frame.size(); ++i) {
+    MapPoint* point = frame.map_points[i];
+    if (!point || !onMovingObject(frame.labels[i])) continue;
+    frame.map_points[i] = nullptr;
+    frame.outlier[i] = false;
+    if (!consistent[i] && !point->isBad() && point->observationCount() > 0) {
+      point->setBad();
+      ++moving_object_stats_.points_retired;
+    }
+  }
+  return any_parked;  // its points join the pose
 }
 
 bool Tracking::needNewKeyFrame(const Frame& frame) const {
@@ -631,8 +684,14 @@ void Tracking::addCloseDepthPoints(KeyFrame* keyframe, Frame& frame) {
   // point becomes one, until past the close depth with at least 100 points
   // counted (tracked ones included).
   std::vector<std::pair<float, size_t>> by_depth;
+  // Not on objects that may move: a box judged parked from the static scene
+  // behind it still holds the walking person's own pixels, and a point made
+  // from depth is trusted at once. Parked objects get their points by
+  // triangulation, which needs them to hold still between keyframes.
+  const bool has_labels = keyframe->labels.size() == keyframe->size();
   for (size_t i = 0; i < keyframe->size(); ++i)
-    if (keyframe->hasDepth(i)) by_depth.emplace_back(keyframe->depth[i], i);
+    if (keyframe->hasDepth(i) && !(has_labels && keyframe->labels[i].motion != ObjectMotion::NotMovable))
+      by_depth.emplace_back(keyframe->depth[i], i);
   std::sort(by_depth.begin(), by_depth.end());
   const double close_depth = keyframe->camera().closeDepth();
   int counted = 0, created = 0;

@@ -3,6 +3,7 @@
 // Defaults are the paper's parameters ("A Modified V-SLAM Technique for Road
 // Scene Modelling"): 1000 ORB features, 8 levels, scale 1.2, H/F ratio 0.45,
 // keyframe every 20 frames / < 100 tracked points / < 90 % of the reference.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -63,6 +64,22 @@ struct LoopParams {
 // loader then reports it missing).
 std::string resolveVocabularyPath(const std::string& path);
 
+// Which frames the detection network sees (issue 15); the frames in between
+// get the last boxes carried along by their keypoints' motion.
+struct DetectEvery {
+  enum class Mode {
+    Frames,     // every `frames`-th frame (by frame index); 1 is the paper's every frame
+    KeyFrames,  // each frame Tracking makes a keyframe, without waiting for the result
+    Auto,       // the newest frame whenever the detection thread has rested, never waited for
+  };
+  Mode mode = Mode::Frames;
+  int frames = 1;
+};
+
+// "N" (a whole number >= 1), "keyframes" or "auto"; std::nullopt for anything else.
+std::optional<DetectEvery> parseDetectEvery(const std::string& text);
+std::string toString(const DetectEvery& every);
+
 struct DetectorParams {
   std::string model = "yolo-fastest-1.1-xl";  // "none" disables detection
   std::string cfg;       // Darknet cfg; empty: resolved from `model`
@@ -78,6 +95,24 @@ struct DetectorParams {
   int box_features = 250;
   std::string dnn_target = "cpu";  // cpu | opencl | cuda
   std::vector<std::string> dynamic_classes;  // keypoints in these boxes are removed
+  // Boxes of these classes are checked for motion each frame instead: a moving
+  // instance's keypoints and map points are kept out of tracking and mapping,
+  // a parked one stays. "coco-movable" stands for COCO's movable classes.
+  std::vector<std::string> moving_classes;
+  DetectEvery detect_every;  // config key detector.detect_every: 1, N, keyframes or auto
+  // Frames a box lives after the network saw it; older carried boxes expire.
+  // 30 (1 s at 30 Hz) outlives fr1_xyz's keyframe spacing (~19 frames), so
+  // --detect-every keyframes still labels the next keyframe.
+  int max_box_age = 30;
+  // OpenCV's worker threads (cv::setNumThreads, process-wide) once a detector
+  // is loaded; 0 leaves OpenCV's default (one per core). 1 measured faster on
+  // 2 shared cores: the network's second thread only took a core from
+  // Tracking and Local Mapping (docs/BENCHMARKS.md, "Detection rate").
+  int dnn_threads = 1;
+  // How boxes add keypoints: "paper" runs ORB again inside each box (Algorithm
+  // 1); "reuse" takes the frame's own FAST corners and describes only the ones
+  // the frame's quota dropped (issue 15).
+  std::string box_filter = "paper";
 };
 
 // What the run feeds the pipeline: colour alone, or colour with registered

@@ -55,6 +55,12 @@ std::vector<std::string> readClassNames(const std::string& names_path);
 
 // Ids of `wanted` class names in `class_names`; throws InputError naming
 // `names_path` and the unknown class (e.g. a typo in --dynamic-classes).
+// COCO's classes of things that move by themselves or are moved (people,
+// animals, vehicles), as darknet's coco.names spells them.
+const std::vector<std::string>& cocoMovableClasses();
+
+// `wanted` may hold "coco-movable", which stands for those of
+// cocoMovableClasses() the names file has.
 std::vector<int> classIdsOf(const std::vector<std::string>& wanted, const std::vector<std::string>& class_names,
                             const std::string& names_path);
 

@@ -64,6 +64,16 @@ KeypointFilterStats applyKeypointFilter(const cv::Size& image_size, const std::v
 // outlive the returned function.
 BoxExtractor orbBoxExtractor(const OrbExtractor& extractor, const ImagePyramid& pyramid, int features_per_box);
 
+// The cheaper extractor (issue 15): the frame's own FAST corners inside the
+// box (no FAST run, same quotas and quadtree), described only where the box's
+// quota picked a corner the frame's quota had dropped; so the filter adds
+// only keypoints that are new. `frame_winners` (when given) accumulates the box
+// winners that were frame keypoints already. Everything passed must outlive
+// the returned function.
+// `corners` is updated as boxes add keypoints (see extractFromCorners).
+BoxExtractor cornerBoxExtractor(const OrbExtractor& extractor, const ImagePyramid& pyramid, OrbCorners& corners,
+                                int features_per_box, int* frame_winners = nullptr);
+
 // Features to ask for in each box: DetectorParams::box_features, or the
 // frame's OrbParams::n_features when that is 0.
 inline int featuresPerBox(const DetectorParams& detector, const OrbParams& orb) {

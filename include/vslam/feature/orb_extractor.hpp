@@ -33,6 +33,19 @@ std::vector<BriefPair> standardOrbPattern();
 
 constexpr int kOrbDescriptorBytes = 32;
 
+// A FAST corner a whole-frame extraction found, kept so that extraction in a
+// sub-window (a detection box) can reuse it instead of running FAST again.
+struct OrbCorner {
+  cv::KeyPoint keypoint;   // level pixels, response = FAST score
+  cv::Point2f level0;      // its level-0 position
+  bool in_frame = false;   // chosen by the frame's own quota (already a frame keypoint)
+};
+
+// Every FAST corner of a frame's extraction, per pyramid level.
+struct OrbCorners {
+  std::vector<std::vector<OrbCorner>> levels;
+};
+
 class OrbExtractor {
  public:
   // Keypoints stay this many pixels inside every level, so the rotated test
@@ -55,11 +68,22 @@ class OrbExtractor {
   // keypoints may lie (empty: the whole image) and only the ROI is scanned;
   // `n_features` (< 0: params().n_features) is spread over the levels of the
   // ROI like the whole-image quota. const and stateless: safe from several threads.
+  // With `corners`, every FAST corner considered (chosen or not) is kept there.
   void extract(const ImagePyramid& pyramid, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors,
-               const cv::Rect& roi = cv::Rect(), int n_features = -1) const;
+               const cv::Rect& roi = cv::Rect(), int n_features = -1, OrbCorners* corners = nullptr) const;
   void extract(const cv::Mat& gray, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) const {
     extract(buildPyramid(gray), keypoints, descriptors);
   }
+
+  // Extraction inside `roi` from the corners a whole-frame extract() kept: the
+  // same level quotas and quadtree as extract(roi, n_features), but no FAST
+  // run, and orientation and descriptor only for the winners the frame did not
+  // already have. Those are returned and marked in_frame in `corners` (they
+  // join the frame's keypoints), so an overlapping ROI after this one does not
+  // describe them again; `frame_winners` (when given) counts the winners that
+  // were in_frame already.
+  void extractFromCorners(const ImagePyramid& pyramid, OrbCorners& corners, const cv::Rect& roi, int n_features,
+                          std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors, int* frame_winners = nullptr) const;
 
   const OrbParams& params() const { return params_; }
   int levels() const { return params_.n_levels; }
@@ -87,6 +111,14 @@ class OrbExtractor {
   std::vector<BriefPair> pattern_;
   std::vector<float> pattern_x_, pattern_y_;  // the 512 test points, pair i = points 2i and 2i+1
   std::vector<int> circle_half_width_;  // per row v of the radius-15 disc: largest |u| inside
+
+  // The ROI of level `level` in its own pixels, kept kEdgeBorder inside it (may be empty).
+  cv::Rect levelRegion(const ImagePyramid& pyramid, int level, const cv::Rect& area) const;
+  // Octave, size and intensity-centroid angle of a chosen corner of level `level`.
+  void orient(const ImagePyramid& pyramid, int level, OrbCorner& corner) const;
+  // Rotated BRIEF of oriented corners, in order; keypoints get their level-0 positions.
+  void describe(const ImagePyramid& pyramid, const std::vector<OrbCorner>& kept, std::vector<cv::KeyPoint>& keypoints,
+                cv::Mat& descriptors) const;
 };
 
 }  // namespace vslam

@@ -26,11 +26,27 @@ struct ScalePyramid {
   double logScaleFactor() const;
 };
 
+// Whether a keypoint lies on something that may move (a box of a class given
+// by --moving-classes), and what its frame's motion check found.
+enum class ObjectMotion : uint8_t {
+  NotMovable,  // outside every such box: static scene
+  Unchecked,   // in such a box, not (yet) enough evidence: kept out of the pose
+  Parked,      // its box's matched points agree with the pose from the static scene
+  Moving,      // they do not: kept out of tracking and mapping
+};
+
 // Per-keypoint semantic label from the keypoint filter (the paper's Algorithm 1).
 struct FeatureLabel {
   int class_id = -1;      // COCO class, -1 = not inside a detection box
   int detection_id = -1;  // index of the detection in its frame, -1 = none
+  ObjectMotion motion = ObjectMotion::NotMovable;
 };
+
+// A keypoint that may constrain the camera's pose.
+inline bool drivesPose(const FeatureLabel& label) {
+  return label.motion == ObjectMotion::NotMovable || label.motion == ObjectMotion::Parked;
+}
+inline bool onMovingObject(const FeatureLabel& label) { return label.motion == ObjectMotion::Moving; }
 
 struct Frame {
   long id = -1;       // running frame number in the run

@@ -55,6 +55,12 @@ class Map {
   KeyFrame* createKeyFrame(const Frame& frame);
   MapPoint* createMapPoint(const Vec3& position_w, KeyFrame* reference);
 
+  // A saved map coming back (map_io/): objects with the ids they were saved
+  // with, in increasing id order; ids made later continue after the largest.
+  // Throws std::logic_error for an id not above every id already in the map.
+  KeyFrame* restoreKeyFrame(long id, const Frame& frame);
+  MapPoint* restoreMapPoint(long id, const Vec3& position_w, KeyFrame* reference, long first_keyframe_id);
+
   // Live (not bad) objects, in creation order.
   std::vector<KeyFrame*> keyframes() const;
   std::vector<MapPoint*> mapPoints() const;

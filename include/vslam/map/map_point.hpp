@@ -70,6 +70,22 @@ class MapPoint {
   cv::Vec3b colour() const { return colour_; }
   void setColour(const cv::Vec3b& bgr) { colour_ = bgr; }
 
+  // Everything about the point that is not its position or observations, as a
+  // saved map stores it (map_io/): restoring it gives the point back exactly,
+  // without recomputing it from keyframes that may have been culled since.
+  struct SavedState {
+    cv::Mat descriptor;
+    Vec3 normal = Vec3::Zero();
+    double min_distance = 0, max_distance = 0;  // unscaled (minDistance() is 0.8x)
+    int visible = 1, found = 1;
+    int class_id = -1;
+    double class_confidence = 0.0;
+    cv::Vec3b colour{128, 128, 128};
+    int confirmed_min_observations = 0;
+  };
+  SavedState savedState() const;
+  void restoreState(const SavedState& state);
+
   // Per-frame scratch used by Tracking to avoid duplicate work; only Tracking touches these.
   long last_frame_seen = -1;
   long track_reference_frame = -1;

@@ -10,6 +10,7 @@
 //
 // World frame: x and z horizontal, y down (like an upright camera's y), the
 // room centred on the origin. Poses are camera-to-world, as on disk.
+#include <array>
 #include <functional>
 #include <memory>
 #include <string>
@@ -36,8 +37,24 @@ struct RoomLoopParams {
   double start_time_s = 0.0;
   unsigned seed = 1;
 
+  // Optional moving object: a billboard showing this image (e.g. a photo of
+  // a person) that walks through the camera's view, for testing how SLAM
+  // copes with things that move. Empty: the room is static.
+  std::string moving_object_image;
+  double moving_object_width_m = 0.75;   // the billboard's height follows the image's aspect ratio
+  double moving_object_radius_m = 1.9;    // distance from the room's centre (the camera circles at path_radius_m)
+  int moving_object_first_frame = 60;     // it enters the view on this frame ...
+  int moving_object_frames = 150;         // ... and crosses it in this many frames
+  double moving_object_sweep_deg = 50.0;  // its bearing from the camera goes from +half to -half of this
+
   static PinholeCamera defaultCamera();
 };
+
+// The moving billboard's corners in the world at `frame` (texture corners
+// (0,0), (1,0), (1,1), (0,1)), upright and facing the room's centre;
+// `aspect` is its height over its width. It moves during its frames and
+// stands still at its first or last place outside them (out of view there).
+std::array<Vec3, 4> movingObjectCorners(const RoomLoopParams& params, int frame, double aspect);
 
 // Ground truth: one camera-to-world pose per frame, timestamps at camera.fps.
 std::vector<StampedPose> roomLoopPath(const RoomLoopParams& params);
@@ -50,6 +67,10 @@ class RoomLoopRenderer {
   ~RoomLoopRenderer();
   RoomLoopRenderer(const RoomLoopRenderer&) = delete;
   RoomLoopRenderer& operator=(const RoomLoopRenderer&) = delete;
+
+  // Places the moving object (if any) where it is at this frame; the views
+  // below show it there. Frame 0 until called.
+  void setFrame(int frame);
 
   // The view from camera-to-world pose T_wc: CV_8UC3 BGR, camera.width x camera.height.
   cv::Mat render(const SE3& T_wc);
@@ -74,7 +95,8 @@ cv::Mat encodeTumDepth(const cv::Mat& depth_m, double depth_factor);
 // Writes a TUM RGB-D folder: rgb/<timestamp>.png, depth/<timestamp>.png (the
 // same timestamps, camera.depth_factor units per metre), rgb.txt, depth.txt,
 // groundtruth.txt and camera.yaml (for `vslam run --seq FOLDER --config
-// FOLDER/camera.yaml`).
+// FOLDER/camera.yaml`). With a moving object, also moving_object.txt: per
+// frame its timestamp and the world position of the billboard's centre.
 // `progress` is called after each frame with (frames written, total).
 void writeRoomLoopSequence(const RoomLoopParams& params, const std::string& folder,
                            const std::function<void(int, int)>& progress = {});

@@ -1,11 +1,13 @@
 #pragma once
 // Turns an image into a Frame: ORB extraction on one pyramid, the paper's
 // keypoint filter with the frame's detections, undistortion, colours, depth.
+#include <functional>
 #include <vector>
 
 #include <opencv2/core.hpp>
 
 #include "vslam/core/config.hpp"
+#include "vslam/detect/box_carrier.hpp"
 #include "vslam/detect/detector.hpp"
 #include "vslam/detect/keypoint_filter.hpp"
 #include "vslam/feature/orb_extractor.hpp"
@@ -17,12 +19,21 @@ namespace vslam {
 struct FrameFilterResult {
   KeypointFilterStats stats;
   double ms = 0.0;  // wall time of the filter (ORB in the boxes included)
+  // detector.box_filter "reuse": box winners that were the frame's own keypoints
+  // already (the duplicates the paper's filter extracts again and drops).
+  int frame_keypoints_reused = 0;
 };
+
+// The boxes for a frame, given its own keypoints (before the filter).
+using BoxSource = std::function<std::vector<Detection>(const FeatureSnapshot& own_features)>;
 
 class FrameBuilder {
  public:
   // `dynamic_class_ids`: classes whose boxes remove keypoints (DetectionStage::dynamicClassIds()).
-  FrameBuilder(const Config& config, const PinholeCamera& camera, std::vector<int> dynamic_class_ids = {});
+  // Keypoints in boxes of `dynamic_class_ids` are removed; those in boxes of
+  // `moving_class_ids` are kept and labelled for the motion check.
+  FrameBuilder(const Config& config, const PinholeCamera& camera, std::vector<int> dynamic_class_ids = {},
+               std::vector<int> moving_class_ids = {});
 
   // `bgr` is the colour image (or grey, CV_8UC1); `depth_m` is CV_32F metres,
   // registered to it and of its size, or empty (no depth: a monocular frame;
@@ -32,6 +43,11 @@ class FrameBuilder {
   Frame build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m = cv::Mat(),
               int n_features = -1, const std::vector<Detection>* detections = nullptr,
               FrameFilterResult* filter = nullptr) const;
+  // The same with boxes that depend on the frame's own keypoints (carried
+  // boxes); `boxes` empty: no filter. `own_features` (when given) receives the
+  // frame's own keypoints and descriptors.
+  Frame build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m, int n_features,
+              const BoxSource& boxes, FrameFilterResult* filter, FeatureSnapshot* own_features) const;
 
   const ScalePyramid& pyramid() const { return pyramid_; }
   const PinholeCamera& camera() const { return camera_; }
@@ -48,6 +64,7 @@ class FrameBuilder {
   ScalePyramid pyramid_;
   cv::Rect2f undistorted_bounds_;
   std::vector<int> dynamic_class_ids_;
+  std::vector<int> moving_class_ids_;
 };
 
 }  // namespace vslam

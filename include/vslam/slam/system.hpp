@@ -7,6 +7,7 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -76,6 +77,12 @@ struct SystemStats {
   int keyframe_waits = 0;   // keyframes that waited for Local Mapping (back-pressure)
   int implausible_loops_rejected = 0;
   int frames_without_depth = 0;  // RGB-D: frames without a paired depth image, tracked as monocular
+  // With a loaded map (System::loadMap): tracked frames whose reference
+  // keyframe came from the file, i.e. localised against the old map; -1 without one.
+  int frames_in_loaded_map = -1;
+  // The motion check of --moving-classes boxes (all 0 without it).
+  int moving_boxes_checked = 0, moving_boxes_moving = 0, moving_boxes_parked = 0, moving_boxes_undecided = 0;
+  int moving_points_retired = 0;
 };
 
 // The detector's part of a run, for report.json's "detector".
@@ -91,6 +98,18 @@ struct DetectionSummary {
   double keypoints_removed_per_frame = 0.0; // median, inside dynamic-class boxes
   double boxes_used_per_frame = 0.0;        // median
   long keypoints_added_total = 0;
+  // Issue 15: which frames the network saw and how the others got their boxes.
+  std::string detect_every;   // "1", "N", "keyframes" or "auto"
+  std::string box_filter;     // "paper" or "reuse"
+  int network_frames = 0;     // detections used (one network run each)
+  int fresh_frames = 0;       // frames with a box of their own detection
+  int carried_frames = 0;     // frames with only carried boxes, or none
+  double box_age_median = 0.0;  // frames, over every box handed to the filter
+  double carried_iou_median = -1.0;  // every N-th frame, N > 1: carried box against the fresh one (-1: none)
+  int boxes_expired = 0;      // carried boxes dropped for age
+  int boxes_unmoved = 0;      // carried boxes dropped for too few matches to move them
+  long frame_keypoints_reused_total = 0;  // "reuse": box winners that were frame keypoints already
+  long duplicates_dropped_total = 0;      // "paper": box keypoints extracted again and dropped as the frame's own
 };
 
 class System {
@@ -130,6 +149,17 @@ class System {
   // the link distance is relative to the median keyframe-to-point depth.
   std::vector<ObjectLandmark> objectMap(const ObjectMapParams& params = ObjectMapParams()) const;
   int lastTrackedPoints() const;
+  // Writes the whole map, its object landmarks and what it was made with to
+  // `path` (SQLite, docs/MAPS.md), atomically; `sequence` is recorded for
+  // people. Throws InputError naming `path` when it cannot be written.
+  void saveMap(const std::string& path, const std::string& sequence) const;
+  // Loads a saved map before the first frame (throws std::logic_error later):
+  // refused with an InputError naming `path` when it is corrupt or was made
+  // with another camera, mode, ORB pyramid or vocabulary. Tracking then
+  // relocalises in it; with `localize` (ORB-SLAM2's localisation mode) no
+  // keyframe is made, nothing in the map changes and no final BA runs,
+  // otherwise mapping continues in it. Returns the keyframes and points loaded.
+  std::pair<int, int> loadMap(const std::string& path, bool localize);
   int lastMatchedPoints() const;  // before the pose optimisation's outlier rejection
   StageTimer& timer() { return timer_; }
   // Loop Closing's bookkeeping (empty state without it); waits for the keyframe in hand.
@@ -144,6 +174,7 @@ class System {
   StageTimer timer_;
   std::unique_ptr<Map> map_;
   std::unique_ptr<Vocabulary> vocabulary_;  // null: no relocalisation by BoW, no loop closing
+  std::string vocabulary_path_;              // "" without a vocabulary
   std::unique_ptr<KeyframeDatabase> database_;
   std::unique_ptr<DetectionStage> detection_;  // nullptr for --detector none; before frame_builder_, which uses its class ids
   std::unique_ptr<FrameBuilder> frame_builder_;
@@ -152,11 +183,12 @@ class System {
   std::unique_ptr<LoopClosing> loop_closing_;
   std::vector<StampedPose> frames_before_final_ba_, keyframes_before_final_ba_;
   long next_frame_id_ = 0;
+  long loaded_max_keyframe_id_ = -1;  // keyframes up to this id came from a loaded map
+  bool localize_ = false;             // loaded with localize: the map is never changed
   int frames_without_depth_ = 0;
   bool finished_ = false;
-  std::set<int> detection_submitted_;  // frames submitted to detection and not yet waited for
   // Keypoint filter outcome per frame (Tracking's thread only).
-  std::vector<int> keypoints_added_, keypoints_removed_, boxes_used_;
+  std::vector<int> keypoints_added_, keypoints_removed_, boxes_used_, keypoints_reused_, duplicates_dropped_;
 };
 
 }  // namespace vslam

@@ -67,12 +67,30 @@ class Tracking {
     database_ = database;
   }
   int relocalisations() const { return relocalisations_; }
+  // What the motion check of --moving-classes boxes found, over the run.
+  struct MovingObjectStats {
+    int boxes_checked = 0;  // box-frames judged or left undecided
+    int moving = 0;
+    int parked = 0;
+    int undecided = 0;       // too few matched points to judge
+    int points_retired = 0;  // map points on instances found moving
+  };
+  const MovingObjectStats& movingObjectStats() const { return moving_object_stats_; }
   // A map reset (lost right after initialisation) also resets Loop Closing.
   void setLoopClosing(LoopClosing* loop_closing) { loop_closing_ = loop_closing; }
   int mapResets() const { return map_resets_; }
   int keyframeWaits() const { return keyframe_waits_; }  // keyframes that waited for Local Mapping
   // Frames the constant-velocity model failed to track (the reference keyframe was tried instead).
   int motionModelMisses() const { return motion_model_misses_; }
+
+  // A map loaded from a file (System::loadMap): the first frame relocalises
+  // in it instead of initialising a new one, and the map is never reset.
+  // `localization_only` is ORB-SLAM2's localisation mode: no keyframe is made
+  // and nothing in the map changes (not even its points' found/visible
+  // counts); tracking relocalises whenever it is lost and otherwise tracks
+  // frame to frame (motion model) and against the local map.
+  void startInLoadedMap(bool localization_only);
+  bool localizationOnly() const { return localization_only_; }
 
   // Tracks one frame; returns true when its pose is known.
   bool track(Frame& frame);
@@ -103,6 +121,9 @@ class Tracking {
   int optimisePose(Frame& frame);  // returns inliers, removes outlier matches' effects
   void updateLocalMap(Frame& frame);
   bool needNewKeyFrame(const Frame& frame) const;
+  // Judges the frame's movable-class boxes under its pose, drops and retires
+  // what is on moving ones; true when a parked one's points should join the pose.
+  bool checkMovingObjects(Frame& frame);
   void createKeyFrame(Frame& frame);
   void resetMap();
   // The last frame's pose again from its reference keyframe (following culled
@@ -138,10 +159,13 @@ class Tracking {
   const Vocabulary* vocabulary_ = nullptr;
   const KeyframeDatabase* database_ = nullptr;
   int relocalisations_ = 0;
+  MovingObjectStats moving_object_stats_;
   int map_resets_ = 0;
   int keyframe_waits_ = 0;
   int motion_model_misses_ = 0;
   bool last_keyframe_was_weak_ = false;  // made with fewer than min_tracked_points tracked
+  bool map_loaded_ = false;          // started in a loaded map: never reset it
+  bool localization_only_ = false;   // --localize: the map is read, never changed
 };
 
 }  // namespace vslam

@@ -316,7 +316,7 @@ TEST(MatchInWindow, ConsecutiveFr1FramesMatchConsistently) {
     EXPECT_EQ(f1.keypoints[i1].octave, 0);
     EXPECT_EQ(f2.keypoints[i2].octave, 0);
     EXPECT_TRUE(used2.insert(i2).second) << "frame-2 feature " << i2 << " matched twice";
-    EXPECT_LE(hammingDistance(f1.descriptors.row(i1), f2.descriptors.row(i2)), kHammingThresholdLow);
+    EXPECT_LE(hammingDistance(f1.descriptors.row(i1), f2.descriptors.row(i2)), kHammingThresholdWindow);
     EXPECT_EQ(prev[i1], f2.points[i2]);
     p1.push_back(f1.points[i1]), p2.push_back(f2.points[i2]), pairs.emplace_back(i1, i2);
   }
@@ -326,8 +326,9 @@ TEST(MatchInWindow, ConsecutiveFr1FramesMatchConsistently) {
   std::cout << "frames 1->2: " << result.count << " matches, " << strict.inliers << " consistent with F at 1.96 px, "
             << loose.inliers << " at 3 px; " << truth.correct << " of " << truth.checked
             << " with depth within 4 px of the ground-truth prediction\n";
-  // Measured: 91 matches (of 217 level-0 features); 73 within 1.96 px of F,
-  // 80 within 3 px; 58 of 71 right by ground truth. The wrong ones are mostly
+  // Measured: 89 matches (of 217 level-0 features); 77 within 1.96 px of F,
+  // 81 within 3 px; 59 of 70 right by ground truth (the random BRIEF pattern
+  // before issue 16, at distance 50: 91, 73, 80, 58 of 71). The wrong ones are mostly
   // on the keyboard (repeated keys inside the 100 px window) and on weak
   // corners; a single pair moves by several % with any change of keypoints, so
   // the precision rule is checked over ten pairs below.
@@ -337,8 +338,9 @@ TEST(MatchInWindow, ConsecutiveFr1FramesMatchConsistently) {
   EXPECT_GE(truth.correct, 0.75 * truth.checked);
 }
 
-// Frames 1->2, 2->3, ..., 10->11 pooled. Measured 927 matches, 87.8 % within
-// 1.96 px (ORB-SLAM's initialiser rule, sigma 1 px) of each pair's F. cv::ORB's
+// Frames 1->2, 2->3, ..., 10->11 pooled. Measured 890 matches, 89.0 % within
+// 1.96 px (ORB-SLAM's initialiser rule, sigma 1 px) of each pair's F (the
+// random BRIEF pattern: 927, 87.8 %). cv::ORB's
 // bunched Harris corners reach 99 % on such pairs: see docs/FEATURES.md.
 TEST(MatchInWindow, TenConsecutiveFr1PairsAreMostlyConsistent) {
   int matches = 0, consistent = 0;

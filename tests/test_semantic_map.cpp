@@ -318,15 +318,7 @@ struct SemanticRun {
   std::vector<ExportedMapPoint> points;
   std::vector<ObjectLandmark> objects;
   DetectionSummary detection;
-  std::vector<ObjectLandmark> plain_objects;  // no outlier rejection, no merging (as before issue 15)
 };
-
-ObjectMapParams plainObjectParams() {
-  ObjectMapParams params;
-  params.outlier_iqr_factor = 1e9;
-  params.confusable_classes.clear();
-  return params;
-}
 
 // Deterministic run over the first `count` frames, submitting each next frame
 // to detection ahead as `vslam run` does.
@@ -347,8 +339,7 @@ SemanticRun runFirstFrames(const Sequence& sequence, const DetectorParams& detec
     image = next;
   }
   system.finish();
-  return {system.frameTrajectory(), system.mapPoints(), system.objectMap(), system.detectionSummary(),
-          system.objectMap(plainObjectParams())};
+  return {system.frameTrajectory(), system.mapPoints(), system.objectMap(), system.detectionSummary()};
 }
 
 int countClass(const std::vector<ExportedMapPoint>& points, int class_id) {
@@ -390,12 +381,16 @@ TEST(SemanticSlam, DetectorAddsKeypointsAndLabelsTheMap) {
   }
 }
 
-// The first 400 frames of fr1_xyz, deterministic (about 25 s on 2 cores: the
-// detector called the monitor a laptop in enough keyframes only from frame
-// 300 or so). Without outlier rejection and merging (as before), the monitor
-// appears twice (tvmonitor, laptop) and its box is 1.23 m wide; now it is one
-// tvmonitor, with the laptop merged in, under 1.2 m in every axis. Sizes are
-// metric through the Sim(3) scale of the trajectory against the ground truth.
+// The first 400 frames of fr1_xyz, deterministic (about 25 s on 2 cores). The
+// monitor must come out as one tvmonitor under 1.2 m in every axis, whatever
+// the detector called it in single keyframes: with the random BRIEF pattern the
+// detector's "laptop" from frame 300 or so made a second screen object without
+// merging, and stray points stretched the plain monitor box to 1.23 m. With
+// standard ORB descriptors (issue 16) no laptop-labelled object forms and the
+// plain box is 0.99 m wide, so that contrast is no longer on this data; the
+// merging and the rejection are held by ObjectMap.OverlappingConfusableClassesMerge
+// and ObjectMap.StrayPointsDoNotStretchTheBox. Sizes are metric through the
+// Sim(3) scale of the trajectory against the ground truth.
 TEST(SemanticSlam, ObjectsOfFr1XyzLookLikeTheObjects) {
   const Sequence sequence = fr1Xyz();
   const SemanticRun run = runFirstFrames(sequence, sequence.config.detector, 400);
@@ -409,7 +404,7 @@ TEST(SemanticSlam, ObjectsOfFr1XyzLookLikeTheObjects) {
     if (object.class_name == "tvmonitor" || object.class_name == "laptop") {
       ++screens;
       EXPECT_EQ(object.class_name, "tvmonitor");
-      EXPECT_EQ(object.merged_classes, (std::vector<std::string>{"laptop"}));
+      for (const std::string& merged : object.merged_classes) EXPECT_EQ(merged, "laptop");
     }
     // Desk-scale classes. The chair is left out: it stands 2.6 m from the
     // camera, where monocular depth scatters its points over more than a
@@ -420,18 +415,6 @@ TEST(SemanticSlam, ObjectsOfFr1XyzLookLikeTheObjects) {
     EXPECT_LE(object.rejected_point_ids.size(), object.point_ids.size() / 5) << object.class_name;
   }
   EXPECT_EQ(screens, 1);
-
-  // The same map without rejection and merging: what the test guards against.
-  int plain_screens = 0;
-  double plain_monitor_width = 0.0;
-  for (const ObjectLandmark& object : run.plain_objects) {
-    if (object.class_name == "laptop") ++plain_screens;
-    if (object.class_name != "tvmonitor") continue;
-    ++plain_screens;
-    plain_monitor_width = std::max(plain_monitor_width, scale * (object.box_max.x() - object.box_min.x()));
-  }
-  EXPECT_EQ(plain_screens, 2);
-  EXPECT_GT(plain_monitor_width, 1.2);
 }
 
 TEST(SemanticSlam, DynamicClassRemovesItsKeypoints) {

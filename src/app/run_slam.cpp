@@ -486,7 +486,11 @@ void printSummary(const nlohmann::json& report, System& system, const Sequence& 
   std::cout << "\nkeyframes: " << stats.keyframes << ", map points: " << stats.map_points << "\n";
   if (!options.load_map.empty())
     std::cout << "localised in the loaded map (" << options.load_map << (options.localize ? ", localisation only" : "")
-              << "): " << stats.frames_in_loaded_map << " / " << stats.frames << " frames\n";
+              << "): " << stats.frames_in_loaded_map << " / " << stats.frames << " frames"
+              << (stats.frames_by_odometry > 0
+                      ? ", " + std::to_string(stats.frames_by_odometry) + " more by visual odometry"
+                      : std::string())
+              << "\n";
   if (report["ate"].is_object()) {
     const nlohmann::json& kf = report["ate"]["keyframes"];
     if (kf.is_null())
@@ -711,6 +715,7 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
                             {"keyframes", loaded.first},
                             {"map_points", loaded.second}};
     report["frames_localised_in_loaded_map"] = stats.frames_in_loaded_map;
+    report["frames_tracked_by_odometry"] = stats.frames_by_odometry;
   }
   // The saved map (docs/MAPS.md); null when none was asked for or it could not be written (see "error").
   report["map_file"] = map_saved ? nlohmann::json(options.save_map) : nlohmann::json(nullptr);

@@ -229,9 +229,11 @@ SystemStats System::stats() const {
   if (loaded_max_keyframe_id_ >= 0) {
     stats.frames_in_loaded_map = 0;
     for (const FrameRecord& record : tracking_->records())
-      if (record.tracked && record.reference && record.reference->id() <= loaded_max_keyframe_id_)
+      if (record.tracked && record.reference && record.reference->id() <= loaded_max_keyframe_id_ &&
+          !record.by_odometry)
         ++stats.frames_in_loaded_map;
   }
+  for (const FrameRecord& record : tracking_->records()) stats.frames_by_odometry += record.by_odometry;
   return stats;
 }
 

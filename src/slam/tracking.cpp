@@ -28,6 +28,7 @@ constexpr int kInitMinKeypoints = 100;
 constexpr int kInitMinKeypointsWithDepth = 500;  // ORB-SLAM2's RGB-D initialisation
 constexpr int kCloseTrackedFew = 100;             // ORB-SLAM2's close-point keyframe rule...
 constexpr int kCloseUntrackedMany = 70;           // ...tracked < 100 and untracked > 70
+constexpr long kOdometryPointId = -1;  // map points have ids >= 0
 constexpr int kNewKeyFrameMinDepthPoints = 100;   // a keyframe adds depth points up to at least this many
 constexpr double kRgbdLeavingMapRatio = 0.25;     // ORB-SLAM2's RGB-D c1c: tracked < 25 % of the reference's
 constexpr int kInitMinMatches = 100;
@@ -38,6 +39,20 @@ constexpr size_t kMaxLocalKeyFrames = 80;
 constexpr size_t kResetMaxKeyFrames = 3;       // lost with this many keyframes or fewer: start again
 constexpr int kRelocMinBowMatches = 15;
 constexpr int kRelocMinInliers = 50;
+
+// A frame's pose and matches, kept to go back to after a later step fails.
+struct TrackedPose {
+  SE3 T_cw;
+  std::vector<MapPoint*> map_points;
+  std::vector<bool> outlier;
+  static TrackedPose of(const Frame& frame) { return {frame.T_cw, frame.map_points, frame.outlier}; }
+  void restore(Frame& frame) const {
+    frame.T_cw = T_cw;
+    frame.map_points = map_points;
+    frame.outlier = outlier;
+    frame.has_pose = true;
+  }
+};
 
 }  // namespace
 
@@ -105,7 +120,9 @@ bool Tracking::track(Frame& frame) {
   std::unique_lock<std::mutex> lock(map_.mutex());
   refreshLastFramePose();
   bool ok = false;
-  if (state_ == TrackingState::Ok) {
+  if (state_ == TrackingState::Ok && odometry_only_) {
+    ok = trackByOdometryOrRelocalise(frame);
+  } else if (state_ == TrackingState::Ok) {
     if (velocity_ && last_frame_ && motionModelAllowed(frame.id, last_relocalisation_frame_id_)) {
       ok = trackWithMotionModel(frame);
       if (!ok) ++motion_model_misses_;
@@ -121,7 +138,21 @@ bool Tracking::track(Frame& frame) {
       spdlog::info("frame {} (t={:.3f}): relocalised", frame.index, frame.timestamp);
     }
   }
-  if (ok) ok = trackLocalMap(frame);
+  // A frame carried by odometry has too few map points for the local map.
+  if (ok && !odometry_only_) {
+    // Localisation mode: a frame the motion model placed with odometry points
+    // stays tracked by them when the local map is too thin (past its edge).
+    // ORB-SLAM2 would call it lost and only try to relocalise.
+    const bool odometry_fallback = !odometry_points_.empty() && frame.trackedCount() > 20;
+    const TrackedPose before_local_map = odometry_fallback ? TrackedPose::of(frame) : TrackedPose{};
+    ok = trackLocalMap(frame);
+    if (!ok && odometry_fallback) {
+      before_local_map.restore(frame);
+      odometry_only_ = true;
+      ok = true;
+    }
+  }
+  dropOdometryPoints(frame);
 
   if (ok) {
     state_ = TrackingState::Ok;
@@ -154,6 +185,7 @@ bool Tracking::track(Frame& frame) {
       if (frame.outlier[i]) frame.map_points[i] = nullptr;
   } else {
     state_ = TrackingState::Lost;
+    odometry_only_ = false;
     velocity_.reset();
     frame.has_pose = false;
     spdlog::warn("frame {} (t={:.3f}): tracking lost", frame.index, frame.timestamp);
@@ -165,6 +197,7 @@ bool Tracking::track(Frame& frame) {
     record.tracked = true;
     record.reference = reference_keyframe_;
     record.T_c_ref = frame.T_cw * reference_keyframe_->pose().inverse();
+    record.by_odometry = odometry_only_;
   }
   records_.push_back(record);
   // Early failure: a map just initialised (a few keyframes) is not worth
@@ -425,6 +458,8 @@ static int discardOutliers(Frame& frame) {
 }
 
 bool Tracking::trackWithMotionModel(Frame& frame) {
+  const bool with_odometry = localization_only_ && config_.sensor == SensorMode::RgbD;
+  if (with_odometry) addOdometryPoints(*last_frame_);
   frame.T_cw = *velocity_ * last_frame_->T_cw;
   frame.map_points.assign(frame.size(), nullptr);
   int matches = searchByProjection(frame, *last_frame_, kProjectionRadiusPx);
@@ -434,7 +469,84 @@ bool Tracking::trackWithMotionModel(Frame& frame) {
   }
   if (matches < 20) return false;
   optimisePose(frame);
-  return discardOutliers(frame) >= 10;
+  const int map_inliers = discardOutliers(frame);
+  if (!with_odometry) return map_inliers >= 10;
+  // ORB-SLAM2's localisation mode: odometry points count toward the pose;
+  // with under 10 map points among them the frame is tracked by odometry alone.
+  const bool tracked = frame.trackedCount() > 20;
+  odometry_only_ = tracked && map_inliers < 10;
+  if (odometry_only_) matches_inliers_ = map_inliers;
+  return tracked;
+}
+
+bool Tracking::trackByOdometryOrRelocalise(Frame& frame) {
+  bool by_odometry = false;
+  TrackedPose odometry;
+  if (velocity_ && last_frame_) {
+    by_odometry = trackWithMotionModel(frame);
+    odometry = TrackedPose::of(frame);
+  }
+  if (database_ && vocabulary_ && relocalise(frame)) {
+    odometry_only_ = false;
+    last_relocalisation_frame_id_ = frame.id;
+    ++relocalisations_;
+    spdlog::debug("frame {} (t={:.3f}): relocalised after visual odometry", frame.index, frame.timestamp);
+    return true;
+  }
+  if (!by_odometry) return false;
+  odometry.restore(frame);
+  odometry_only_ = true;
+  return true;
+}
+
+void Tracking::addOdometryPoints(Frame& last) {
+  if (!last.hasDepthImage() || !last.has_pose) return;
+  // As ORB-SLAM2: the keypoints with depth and no map point, nearest first;
+  // all the close ones, and at least the 100 nearest.
+  std::vector<std::pair<float, size_t>> by_depth;
+  for (size_t i = 0; i < last.size(); ++i) {
+    const MapPoint* point = last.map_points[i];
+    if (last.hasDepth(i) && (!point || point->observationCount() == 0)) by_depth.emplace_back(last.depth[i], i);
+  }
+  std::sort(by_depth.begin(), by_depth.end());
+  const double close_depth = last.camera->closeDepth();
+  const SE3 T_wc = last.T_cw.inverse();
+  int added = 0;
+  for (const auto& [depth, i] : by_depth) {
+    if (depth > close_depth && added >= kNewKeyFrameMinDepthPoints) break;
+    const Vec3 position_w = T_wc * (last.camera->unproject(last.point(i)) * static_cast<double>(depth));
+    // No keyframe observes it, so matching treats it as replaceable and
+    // discardOutliers() never counts it as a map point.
+    auto point = std::make_unique<MapPoint>(kOdometryPointId, position_w, nullptr, -1);
+    MapPoint::SavedState state;
+    state.descriptor = last.descriptors.row(static_cast<int>(i));
+    point->restoreState(state);
+    last.map_points[i] = point.get();
+    if (i < last.outlier.size()) last.outlier[i] = false;
+    odometry_points_.push_back(std::move(point));
+    ++added;
+  }
+}
+
+void Tracking::dropOdometryPoints(Frame& frame) {
+  if (odometry_points_.empty()) return;
+  const auto unlink = [](Frame& f) {
+    for (MapPoint*& point : f.map_points)
+      if (point && point->id() == kOdometryPointId) point = nullptr;
+  };
+  if (last_frame_) unlink(*last_frame_);
+  if (frame.hasDepthImage() || !frame.has_pose) {
+    unlink(frame);
+    odometry_points_.clear();
+    return;
+  }
+  // A frame without a depth image has none to make the next frame's points
+  // from: it keeps the ones it matched for one more frame.
+  std::vector<std::unique_ptr<MapPoint>> kept;
+  for (std::unique_ptr<MapPoint>& point : odometry_points_)
+    if (std::find(frame.map_points.begin(), frame.map_points.end(), point.get()) != frame.map_points.end())
+      kept.push_back(std::move(point));
+  odometry_points_ = std::move(kept);
 }
 
 bool Tracking::trackReferenceKeyFrame(Frame& frame) {

@@ -80,6 +80,9 @@ struct SystemStats {
   // With a loaded map (System::loadMap): tracked frames whose reference
   // keyframe came from the file, i.e. localised against the old map; -1 without one.
   int frames_in_loaded_map = -1;
+  // --localize with depth: tracked frames carried by visual odometry alone
+  // (under 10 map points matched), not counted in frames_in_loaded_map.
+  int frames_by_odometry = 0;
   // The motion check of --moving-classes boxes (all 0 without it).
   int moving_boxes_checked = 0, moving_boxes_moving = 0, moving_boxes_parked = 0, moving_boxes_undecided = 0;
   int moving_points_retired = 0;

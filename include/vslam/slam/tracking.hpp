@@ -54,6 +54,9 @@ struct FrameRecord {
   bool tracked = false;
   KeyFrame* reference = nullptr;
   SE3 T_c_ref;  // frame camera <- reference keyframe camera
+  // --localize with depth: tracked by visual odometry alone (under 10 map
+  // points matched), not localised against the map.
+  bool by_odometry = false;
 };
 
 class Tracking {
@@ -82,13 +85,17 @@ class Tracking {
   int keyframeWaits() const { return keyframe_waits_; }  // keyframes that waited for Local Mapping
   // Frames the constant-velocity model failed to track (the reference keyframe was tried instead).
   int motionModelMisses() const { return motion_model_misses_; }
+  bool localizingByOdometry() const { return odometry_only_; }
 
   // A map loaded from a file (System::loadMap): the first frame relocalises
   // in it instead of initialising a new one, and the map is never reset.
   // `localization_only` is ORB-SLAM2's localisation mode: no keyframe is made
   // and nothing in the map changes (not even its points' found/visible
   // counts); tracking relocalises whenever it is lost and otherwise tracks
-  // frame to frame (motion model) and against the local map.
+  // frame to frame (motion model) and against the local map. With depth, as
+  // in ORB-SLAM2, the motion model also matches temporary points made from
+  // the last frame's depth, so that a camera leaving the mapped area is
+  // carried by visual odometry while every frame tries to relocalise.
   void startInLoadedMap(bool localization_only);
   bool localizationOnly() const { return localization_only_; }
 
@@ -115,6 +122,14 @@ class Tracking {
   bool needCloseKeyFrame(const Frame& frame) const;
   void addCloseDepthPoints(KeyFrame* keyframe, Frame& frame);
   bool trackWithMotionModel(Frame& frame);
+  // Localisation mode after a frame tracked by odometry alone: the motion
+  // model and relocalisation both, the relocalised pose preferred.
+  bool trackByOdometryOrRelocalise(Frame& frame);
+  // Localisation mode with depth: the last frame's close keypoints without a
+  // map point get temporary points, never put into the map.
+  void addOdometryPoints(Frame& last);
+  // Unlinks the temporary points from `frame` and the last frame, and frees them.
+  void dropOdometryPoints(Frame& frame);
   bool trackReferenceKeyFrame(Frame& frame);
   bool trackLocalMap(Frame& frame);
   bool relocalise(Frame& frame);
@@ -166,6 +181,8 @@ class Tracking {
   bool last_keyframe_was_weak_ = false;  // made with fewer than min_tracked_points tracked
   bool map_loaded_ = false;          // started in a loaded map: never reset it
   bool localization_only_ = false;   // --localize: the map is read, never changed
+  bool odometry_only_ = false;       // --localize: the last frame matched under 10 map points
+  std::vector<std::unique_ptr<MapPoint>> odometry_points_;  // the last frame's temporary points
 };
 
 }  // namespace vslam

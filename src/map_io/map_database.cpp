@@ -338,6 +338,19 @@ std::string describeCamera(const PinholeCamera& c) {
   return text;
 }
 
+// The run that loads a map goes on counting from its ids and subtracts them
+// (frames since a keyframe, a point's age): one near the end of `long` would
+// overflow there, or at once in Map::restoreKeyFrame. 2^40 is beyond any run
+// (a thousand keyframes a second for 34 years).
+constexpr long long kMaxStoredId = 1LL << 40;
+
+long storedId(long long value, const std::string& path, const std::string& what) {
+  if (value < 0 || value > kMaxStoredId)
+    throw InputError(path, 0, what + " " + std::to_string(value) + " is out of range (0.." +
+                                  std::to_string(kMaxStoredId) + ")");
+  return static_cast<long>(value);
+}
+
 cv::Mat descriptorFrom(const std::vector<uint8_t>& bytes, const std::string& path, const std::string& what) {
   if (bytes.size() != kDescriptorBytes)
     throw InputError(path, 0, what + " has a descriptor of " + std::to_string(bytes.size()) + " bytes, not 32");
@@ -472,12 +485,12 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
         "green, blue, depth, u_right, descriptor FROM keypoints WHERE keyframe_id = ? ORDER BY idx");
     long previous_id = -1;
     while (rows.step()) {
-      const long id = static_cast<long>(rows.integer(0));
+      const long id = storedId(rows.integer(0), path, "keyframe id");
       // Ids are the tables' primary keys, so unique unless the schema itself was damaged.
       if (id <= previous_id) refuse("keyframe id " + std::to_string(id) + " is not unique or not >= 0");
       previous_id = id;
       Frame frame;
-      frame.id = static_cast<long>(rows.integer(1));
+      frame.id = storedId(rows.integer(1), path, "keyframe " + std::to_string(id) + "'s frame_id");
       frame.index = static_cast<int>(rows.integer(2));
       frame.timestamp = rows.real(3);
       frame.camera = &camera;
@@ -574,13 +587,13 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
         "confirmed_min_observations FROM map_points ORDER BY id");
     long previous_id = -1;
     while (rows.step()) {
-      const long id = static_cast<long>(rows.integer(0));
+      const long id = storedId(rows.integer(0), path, "map point id");
       if (id <= previous_id) refuse("map point id " + std::to_string(id) + " is not unique or not >= 0");
       previous_id = id;
       const std::string where = "map point " + std::to_string(id);
       KeyFrame* reference = keyframeAt(rows.integer(4), where + "'s reference");
       MapPoint* point = map.restoreMapPoint(id, Vec3(rows.real(1), rows.real(2), rows.real(3)), reference,
-                                            static_cast<long>(rows.integer(5)));
+                                            storedId(rows.integer(5), path, where + "'s first_keyframe_id"));
       MapPoint::SavedState state;
       if (!rows.isNull(6)) state.descriptor = descriptorFrom(rows.blob(6), path, where);
       state.normal = Vec3(rows.real(7), rows.real(8), rows.real(9));

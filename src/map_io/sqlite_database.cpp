@@ -9,6 +9,8 @@
 namespace vslam {
 namespace {
 
+constexpr int kMaxReadValueBytes = 1 << 20;
+
 // SQLite's messages may quote a damaged schema, newlines included: an error stays one line.
 std::string oneLine(std::string message) {
   for (char& c : message)
@@ -110,6 +112,10 @@ SqliteDatabase::SqliteDatabase(const std::string& path, Access access) : path_(p
     database_ = nullptr;
     throw InputError(path, 0, "SQLite cannot open it: " + reason);
   }
+  // A file's schema may compute a column (`descriptor BLOB AS (zeroblob(900000000))`):
+  // SQLite would build each such value, up to 1 GB, and we would copy it. A map's
+  // longest value is a file path; a larger one is SQLite's "string or blob too big".
+  if (access == Access::ReadOnly) sqlite3_limit(database_, SQLITE_LIMIT_LENGTH, kMaxReadValueBytes);
 }
 
 SqliteDatabase::~SqliteDatabase() { sqlite3_close(database_); }

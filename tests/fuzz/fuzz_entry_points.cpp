@@ -1,7 +1,12 @@
 #include "fuzz_entry_points.hpp"
 
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <system_error>
 
 #include <opencv2/core.hpp>
 
@@ -13,6 +18,8 @@
 #include "vslam/io/text_table.hpp"
 #include "vslam/io/timestamp_association.hpp"
 #include "vslam/io/trajectory_io.hpp"
+#include "vslam/map/map.hpp"
+#include "vslam/map_io/map_database.hpp"
 #include "vslam/optimize/bundle_adjuster.hpp"
 #include "vslam/place/vocabulary.hpp"
 
@@ -45,6 +52,59 @@ constexpr const char* kSmallCfg =
     "[convolutional]\nbatch_normalize=1\nfilters=4\nsize=3\n"
     "[convolutional]\nfilters=2\nsize=1\n";
 
+// Far above any seed: larger inputs would only slow the runs down (SQLite's
+// integrity check reads every page), whatever -max_len says.
+constexpr std::size_t kMaxMapFileBytes = 1 << 20;
+
+// The map reader takes a path (SQLite opens the file itself), so the input is
+// written to a file named for this process (libFuzzer's -jobs and -fork run
+// several) and removed afterwards, with any side file SQLite may have made.
+class TemporaryMapFile {
+ public:
+  TemporaryMapFile(const std::uint8_t* data, std::size_t size)
+      : path_((std::filesystem::temp_directory_path() / ("vslam_fuzz_map_" + std::to_string(::getpid()) + ".sqlite"))
+                  .string()) {
+    std::ofstream out(path_, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+    out.close();
+    if (!out) {
+      removeFiles();
+      throw std::runtime_error("cannot write the fuzz input to " + path_);  // the machine's fault, not the reader's
+    }
+  }
+  ~TemporaryMapFile() { removeFiles(); }
+  TemporaryMapFile(const TemporaryMapFile&) = delete;
+  TemporaryMapFile& operator=(const TemporaryMapFile&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  void removeFiles() const {
+    std::error_code ignored;
+    for (const char* suffix : {"", "-journal", "-wal", "-shm"}) std::filesystem::remove(path_ + suffix, ignored);
+  }
+  std::string path_;
+};
+
+// The camera of the map_file seeds (TUM freiburg1, with its distortion, so
+// that the loader's image bounds come from undistorted corners as in a run).
+PinholeCamera freiburg1Camera() {
+  PinholeCamera camera;
+  camera.name = "tum_fr1";
+  camera.width = 640;
+  camera.height = 480;
+  camera.fx = 517.306408;
+  camera.fy = 516.469215;
+  camera.cx = 318.643040;
+  camera.cy = 255.313989;
+  camera.k1 = 0.262383;
+  camera.k2 = -0.953104;
+  camera.p1 = -0.005358;
+  camera.p2 = 0.002628;
+  camera.k3 = 1.163314;
+  camera.bf = 40.0;
+  return camera;
+}
+
 }  // namespace
 
 const std::vector<FuzzTarget>& fuzzTargets() {
@@ -60,6 +120,7 @@ const std::vector<FuzzTarget>& fuzzTargets() {
       {"darknet_weights", fuzzDarknetWeights},
       {"ply", fuzzPly},
       {"bundle_problem", fuzzBundleProblem},
+      {"map_file", fuzzMapFile},
   };
   return kTargets;
 }
@@ -161,6 +222,33 @@ bool fuzzBundleProblem(const std::uint8_t* data, std::size_t size) {
   return accepts([&] {
     std::istringstream in(bytesOf(data, size));
     loadBundleProblem(in, "problem.txt");
+  });
+}
+
+bool fuzzMapFile(const std::uint8_t* data, std::size_t size) {
+  if (size > kMaxMapFileBytes) return false;
+  const TemporaryMapFile file(data, size);
+  return accepts([&] {
+    // `vslam map info`: the header (after SQLite's integrity check), then the row counts.
+    const MapFileHeader header = readMapHeader(file.path());
+    readMapCounts(file.path());
+    // `vslam run --load-map`: the check against the run, then the whole map. A
+    // refusal by the check does not end the input here: the loader must read a
+    // file made with any camera, mode or vocabulary just as safely.
+    const PinholeCamera camera = freiburg1Camera();
+    const ScalePyramid pyramid = makeScalePyramid(8, 1.2);
+    MapRequirements required;
+    required.mode = header.mode;  // the file's, so that the check goes on to compare the camera
+    required.camera = camera;
+    required.vocabulary_checksum = "ec2a24000922ae8b";  // the seeds' (vocab/orbvoc.bin)
+    try {
+      checkMapCompatible(file.path(), header, required);
+    } catch (const InputError&) {
+    }
+    Map map;
+    std::vector<ObjectLandmark> objects;
+    std::vector<std::string> class_names;
+    loadMapDatabase(file.path(), map, camera, pyramid, &objects, &class_names);
   });
 }
 

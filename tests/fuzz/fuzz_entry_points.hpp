@@ -39,5 +39,8 @@ bool fuzzDarknetCfg(const std::uint8_t* data, std::size_t size);  // a .cfg, the
 bool fuzzDarknetWeights(const std::uint8_t* data, std::size_t size);
 bool fuzzPly(const std::uint8_t* data, std::size_t size);            // map.ply
 bool fuzzBundleProblem(const std::uint8_t* data, std::size_t size);  // a recorded bundle problem
+// A saved map (SQLite), through a temporary file: what `vslam map info` and
+// `vslam run --load-map` read (header, counts, compatibility, the whole map).
+bool fuzzMapFile(const std::uint8_t* data, std::size_t size);
 
 }  // namespace vslam::fuzz

@@ -19,15 +19,17 @@
 namespace vslam {
 namespace {
 
-TEST(MapContinue, SecondHalfOfTheRoomLoopIsMappedIntoTheFirstAndClosesTheLoop) {
+void continueTheRoomLoop(bool deterministic) {
   RoomLoopParams room;  // 500 frames, 1.2 turns, seed 1
   const std::vector<StampedPose> path = roomLoopPath(room);
   RoomLoopRenderer renderer(room);
   const size_t half = path.size() / 2;
-  const std::string map_file = (test::scratchDir("map_continue_room") / "first_half.sqlite").string();
+  const std::string map_file =
+      (test::scratchDir(deterministic ? "map_continue_room" : "map_continue_room_threaded") / "first_half.sqlite")
+          .string();
 
   SystemOptions options;
-  options.deterministic = true;
+  options.deterministic = deterministic;
   Config config;
   config.camera = room.camera;
   config.detector.model = "none";
@@ -77,6 +79,13 @@ TEST(MapContinue, SecondHalfOfTheRoomLoopIsMappedIntoTheFirstAndClosesTheLoop) {
   std::printf("keyframe ATE of the whole map after continuing: %.4f m (%zu keyframes)\n", ate.rmse_m,
               second.keyframeTrajectory().size());
   EXPECT_LT(ate.rmse_m, 0.03);  // the room is 6 m wide
+}
+
+TEST(MapContinue, SecondHalfOfTheRoomLoopIsMappedIntoTheFirstAndClosesTheLoop) { continueTheRoomLoop(true); }
+
+// As `vslam run` runs by default: Tracking, Local Mapping and Loop Closing on their own threads.
+TEST(MapContinue, SecondHalfOfTheRoomLoopIsMappedIntoTheFirstAndClosesTheLoopThreaded) {
+  continueTheRoomLoop(false);
 }
 
 }  // namespace

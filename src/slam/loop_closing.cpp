@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <optional>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -24,6 +25,7 @@ constexpr int kMinBowMatches = 20;            // to try a Sim(3)
 constexpr int kRansacIterations = 300;
 constexpr int kMinRansacInliers = 20;
 constexpr int kMinLoopInliers = 40;           // after the projection search (ORB-SLAM's value)
+constexpr double kSim3SearchRadius = 7.5;     // px at level 0, guided search after RANSAC (ORB-SLAM's value)
 constexpr int kEssentialCovisibilityWeight = 100;
 constexpr int kPoseGraphIterations = 20;
 constexpr int kLoopFullBaIterations = 10;
@@ -434,15 +436,13 @@ bool LoopClosing::computeSim3(KeyFrame* current, const std::vector<KeyFrame*>& c
   for (KeyFrame* candidate : candidates) {
     std::vector<MapPoint*> bow_matches;
     if (searchByBoW(*current, *candidate, bow_matches) < kMinBowMatches) continue;
-    // Matched pairs in each camera's coordinates.
-    std::vector<Sim3Match> pairs;
-    std::vector<int> keypoint_of;
-    for (size_t i = 0; i < bow_matches.size(); ++i) {
+    // A matched pair in each camera's coordinates: the current keyframe's point
+    // at keypoint i and the candidate's point `other`.
+    auto pairOf = [&](size_t i, MapPoint* other) -> std::optional<Sim3Match> {
       MapPoint* own = current->mapPoint(i);
-      MapPoint* other = bow_matches[i];
-      if (!own || own->isBad() || !other || other->isBad()) continue;
+      if (!own || own->isBad() || !other || other->isBad()) return std::nullopt;
       const int j = other->keypointIn(candidate);
-      if (j < 0) continue;
+      if (j < 0) return std::nullopt;
       Sim3Match m;
       m.point1_c1 = current->pose() * own->position();
       m.point2_c2 = candidate->pose() * other->position();
@@ -450,9 +450,15 @@ bool LoopClosing::computeSim3(KeyFrame* current, const std::vector<KeyFrame*>& c
       m.pixel2 = candidate->point(j);
       m.inv_sigma2_1 = pyramid.inv_sigma2[current->keypoints[i].octave];
       m.inv_sigma2_2 = pyramid.inv_sigma2[candidate->keypoints[j].octave];
-      pairs.push_back(m);
-      keypoint_of.push_back(static_cast<int>(i));
-    }
+      return m;
+    };
+    std::vector<Sim3Match> pairs;
+    std::vector<int> keypoint_of;
+    for (size_t i = 0; i < bow_matches.size(); ++i)
+      if (const std::optional<Sim3Match> m = pairOf(i, bow_matches[i])) {
+        pairs.push_back(*m);
+        keypoint_of.push_back(static_cast<int>(i));
+      }
     if (static_cast<int>(pairs.size()) < kMinBowMatches) continue;
 
     // RANSAC over minimal sets of three pairs (seeded by the keyframe: deterministic);
@@ -476,18 +482,24 @@ bool LoopClosing::computeSim3(KeyFrame* current, const std::vector<KeyFrame*>& c
     const Sim3Result ransac =
         solveSim3Ransac(correspondences, K, K, ransac_params, static_cast<uint32_t>(current->id()));
     if (!ransac.success) continue;
-    const Sim3 best = ransac.S12;
-    const int best_inliers = ransac.n_inliers;
 
-    // Refine on the inliers, with more matches found by projection.
-    const std::vector<bool>& mask = ransac.inliers;
-    std::vector<Sim3Match> inlier_pairs;
+    // Guided search with the RANSAC similarity (ORB-SLAM's SearchBySim3): the
+    // mutual matches it finds join the inliers, and all are refined together.
+    std::vector<MapPoint*> matches12(current->size(), nullptr);
     for (size_t k = 0; k < pairs.size(); ++k)
-      if (mask[k]) inlier_pairs.push_back(pairs[k]);
-    Sim3 S12 = best;
+      if (ransac.inliers[k]) matches12[keypoint_of[k]] = bow_matches[keypoint_of[k]];
+    const int guided = searchBySim3(*current, *candidate, ransac.S12, matches12, kSim3SearchRadius);
+    std::vector<Sim3Match> refine_pairs;
+    std::vector<int> refine_keypoint_of;
+    for (size_t i = 0; i < matches12.size(); ++i)
+      if (const std::optional<Sim3Match> m = pairOf(i, matches12[i])) {
+        refine_pairs.push_back(*m);
+        refine_keypoint_of.push_back(static_cast<int>(i));
+      }
+    Sim3 S12 = ransac.S12;
     Sim3OptimizationOptions refine_options;
     refine_options.fix_scale = fix_scale;
-    const Sim3OptimizationResult refined = optimizeSim3(camera, inlier_pairs, S12, refine_options);
+    const Sim3OptimizationResult refined = optimizeSim3(camera, refine_pairs, S12, refine_options);
     if (refined.n_inliers < kMinRansacInliers) continue;
 
     std::vector<MapPoint*> loop_points;
@@ -503,16 +515,12 @@ bool LoopClosing::computeSim3(KeyFrame* current, const std::vector<KeyFrame*>& c
     }
     const Sim3 S_cw = S12 * toSim3(candidate->pose());
     std::vector<MapPoint*> matched(current->size(), nullptr);
-    size_t q = 0;
-    for (size_t k = 0; k < pairs.size(); ++k)
-      if (mask[k]) {
-        if (refined.inlier[q]) matched[keypoint_of[k]] = bow_matches[keypoint_of[k]];
-        ++q;
-      }
+    for (size_t q = 0; q < refine_pairs.size(); ++q)
+      if (refined.inlier[q]) matched[refine_keypoint_of[q]] = matches12[refine_keypoint_of[q]];
     searchLoopByProjection(*current, S_cw, loop_points, matched, 10.0);
     const int total = static_cast<int>(std::count_if(matched.begin(), matched.end(), [](MapPoint* p) { return p; }));
-    spdlog::debug("loop candidate {} for keyframe {}: {} BoW, {} RANSAC, {} refined, {} total", candidate->id(),
-                  current->id(), pairs.size(), best_inliers, refined.n_inliers, total);
+    spdlog::debug("loop candidate {} for keyframe {}: {} BoW, {} RANSAC, {} by Sim(3) search, {} refined, {} total",
+                  candidate->id(), current->id(), pairs.size(), ransac.n_inliers, guided, refined.n_inliers, total);
     if (total < kMinLoopInliers) continue;
     if (!loopAccepted(S12.s, total)) {
       ++implausible_rejected_;

@@ -265,6 +265,63 @@ std::optional<PredictedObservation> predictObservation(const MapPoint& point, co
   return PredictedObservation{px, point.predictLevel(distance, keyframe.pyramid())};
 }
 
+namespace {
+
+// One direction of searchBySim3: for every map point of `from` (keypoints not
+// in `skip_from`), the keypoint of `to` (not in `skip_to`) it projects onto
+// under S_to_w with the nearest descriptor, or -1. Indexed by `from`'s keypoints.
+std::vector<int> matchBySimilarity(const KeyFrame& from, const KeyFrame& to, const Sim3& S_to_w,
+                                   const std::vector<bool>& skip_from, const std::vector<bool>& skip_to,
+                                   double radius_px) {
+  std::vector<int> match(from.size(), -1);
+  const Vec3 centre_w = S_to_w.inverse().t;
+  for (size_t i = 0; i < from.size(); ++i) {
+    const MapPoint* point = from.mapPoint(i);
+    if (skip_from[i] || !point || point->isBad()) continue;
+    const std::optional<PredictedObservation> seen = predictObservation(*point, to, S_to_w, centre_w);
+    if (!seen) continue;
+    const double radius = radius_px * to.pyramid().scale[seen->level];
+    int best_distance = std::numeric_limits<int>::max();
+    for (int j : to.grid.featuresInArea(seen->pixel.x(), seen->pixel.y(), radius, seen->level - 1, seen->level)) {
+      if (skip_to[j]) continue;
+      const int d = hammingDistance(point->descriptor().ptr<uint8_t>(), to.descriptors.ptr<uint8_t>(j));
+      if (d < best_distance) {
+        best_distance = d;
+        match[i] = j;
+      }
+    }
+    if (best_distance > kHammingThresholdHigh) match[i] = -1;
+  }
+  return match;
+}
+
+}  // namespace
+
+int searchBySim3(const KeyFrame& kf1, const KeyFrame& kf2, const Sim3& S12, std::vector<MapPoint*>& matches12,
+                 double radius_px) {
+  matches12.resize(kf1.size(), nullptr);
+  std::vector<bool> matched1(kf1.size(), false), matched2(kf2.size(), false);
+  for (size_t i = 0; i < kf1.size(); ++i) {
+    if (!matches12[i]) continue;
+    matched1[i] = true;
+    const int j = matches12[i]->keypointIn(&kf2);
+    if (j >= 0) matched2[j] = true;
+  }
+  // World -> camera of each keyframe as the other sees it through the similarity.
+  const Sim3 S_1w = Sim3(kf1.pose());
+  const Sim3 S_2w = Sim3(kf2.pose());
+  const std::vector<int> match12 = matchBySimilarity(kf1, kf2, S12.inverse() * S_1w, matched1, matched2, radius_px);
+  const std::vector<int> match21 = matchBySimilarity(kf2, kf1, S12 * S_2w, matched2, matched1, radius_px);
+  int added = 0;
+  for (size_t i = 0; i < kf1.size(); ++i) {
+    const int j = match12[i];
+    if (j < 0 || match21[j] != static_cast<int>(i)) continue;
+    matches12[i] = kf2.mapPoint(j);
+    ++added;
+  }
+  return added;
+}
+
 int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius_factor) {
   const ScalePyramid& pyramid = keyframe->pyramid();
   const Sim3 S_cw(keyframe->pose());

@@ -61,6 +61,18 @@ struct PredictedObservation {
 std::optional<PredictedObservation> predictObservation(const MapPoint& point, const KeyFrame& keyframe,
                                                        const Sim3& S_cw, const Vec3& centre_w);
 
+// ORB-SLAM's SearchBySim3, the guided search of a loop after its Sim(3)
+// RANSAC. S12 maps kf2's camera coordinates into kf1's. kf1's map points are
+// projected into kf2 with S12^-1 and kf2's into kf1 with S12; each takes the
+// keypoint with the nearest descriptor (Hamming <= 100) within `radius_px`
+// times the scale of its predicted level, at that level or the one below,
+// among keypoints not yet matched. A pair is kept only when both directions
+// chose it. `matches12` holds, per kf1 keypoint, the kf2 map point matched to
+// it; the pairs already in it stay and take no part in the search (neither
+// their keypoints nor their points). Returns the number of pairs added.
+int searchBySim3(const KeyFrame& kf1, const KeyFrame& kf2, const Sim3& S12, std::vector<MapPoint*>& matches12,
+                 double radius_px = 7.5);
+
 // Projects `points` into `keyframe` and fuses each with the keyframe's
 // matching keypoint: adds an observation, or merges with the point already
 // there (keeping the one seen more). Returns the number fused.

@@ -261,10 +261,11 @@ TEST(ReliabilitySignals, SigtermMidRunWritesWhatWasComputedAndExits143) {
 }
 
 // The shared folder holds 16 of fr3_long_office_household's 2585 frames: the
-// run says so, with the fetch command, and the report records the count. Its
-// keyframe ATE has too few poses, but the frames' ATE is still computed (before,
-// one failure took both).
-TEST(ReliabilityData, IncompleteNamedSequenceIsFlaggedAndFrameAteStillComputed) {
+// run says so, with the fetch command, and the report records the count.
+// Whether a monocular map starts within those 16 frames is not this test's
+// business (it does not with standard ORB descriptors, docs/BENCHMARKS.md):
+// either there is an ATE or the report says why there is none.
+TEST(ReliabilityData, IncompleteNamedSequenceIsFlagged) {
   const fs::path dir = test::scratchDir("reliability_incomplete");
   const Outcome run =
       vslam("run --seq tum/fr3_long_office_household --deterministic --no-render --out " +
@@ -276,13 +277,8 @@ TEST(ReliabilityData, IncompleteNamedSequenceIsFlaggedAndFrameAteStillComputed) 
   const nlohmann::json report = nlohmann::json::parse(slurp(dir / "run" / "report.json"));
   EXPECT_EQ(report["frames_expected"], 2585);
   EXPECT_EQ(report["status"], "completed");
-  ASSERT_TRUE(report["ate"].is_object()) << report.dump(2);
-  EXPECT_TRUE(report["ate"]["frames"].is_object()) << report["ate"];
-  EXPECT_EQ(report["ate"]["frames"]["pairs"], 7);
-  EXPECT_TRUE(report["ate"]["keyframes"].is_null()) << report["ate"];
-  EXPECT_EQ(report["ate"]["keyframes_unavailable"],
-            "only 1 of 2 estimated poses pair with ground truth within 0.020000 s; at least 3 are needed to align");
-  EXPECT_TRUE(contains(run.out, "ATE RMSE frames:    0.00")) << run.out;
+  EXPECT_TRUE(report["ate"].is_object() || (report["ate"].is_null() && report["ate_unavailable"].is_string()))
+      << report.dump(2);
 
   // A folder given by path has no catalogue count: no warning, and null, not 0.
   const fs::path copy = copyOfFr1Xyz(dir, 12);
@@ -290,6 +286,26 @@ TEST(ReliabilityData, IncompleteNamedSequenceIsFlaggedAndFrameAteStillComputed) 
   ASSERT_EQ(plain.exit_code, 0) << plain.err;
   EXPECT_FALSE(contains(plain.err, "of the sequence's")) << plain.err;
   EXPECT_TRUE(nlohmann::json::parse(slurp(dir / "plain" / "report.json"))["frames_expected"].is_null());
+}
+
+// Too few keyframes for an aligned ATE does not take the frames' ATE with it
+// (before, one failure took both): an RGB-D start on fr1_xyz keeps its first
+// keyframe for the 8 frames.
+TEST(ReliabilityData, FrameAteIsComputedWhenTheKeyframesAreTooFew) {
+  const fs::path dir = test::scratchDir("reliability_few_keyframes");
+  const Outcome run = vslam("run --seq tum/fr1_xyz --mode rgbd --max-frames 8 --detector none --deterministic "
+                            "--no-render --out " +
+                                quoted((dir / "run").string()),
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir / "run" / "report.json"));
+  ASSERT_TRUE(report["ate"].is_object()) << report.dump(2);
+  EXPECT_TRUE(report["ate"]["frames"].is_object()) << report["ate"];
+  EXPECT_EQ(report["ate"]["frames"]["pairs"], 8);
+  EXPECT_TRUE(report["ate"]["keyframes"].is_null()) << report["ate"];
+  EXPECT_EQ(report["ate"]["keyframes_unavailable"],
+            "only 1 of 1 estimated poses pair with ground truth within 0.020000 s; at least 3 are needed to align");
+  EXPECT_TRUE(contains(run.out, "ATE RMSE frames:    0.00")) << run.out;
 }
 
 // A KITTI folder with the real times.txt rhythm (0.1036224 s a frame; the

@@ -137,6 +137,22 @@ TEST(Sequence, KittiOdometry00) {
   EXPECT_EQ(seq.loadColor(0).type(), CV_8UC3);
 }
 
+// Issue 15: the Bonn RGB-D Dynamic sequence in ../shared by its name, with its
+// own camera; before, only a folder path with --config config/bonn.yaml worked.
+TEST(Sequence, BonnCrowdByNameWithItsCamera) {
+  const Sequence crowd = openSequence("bonn/crowd", sharedRoot());
+  EXPECT_EQ(crowd.kind, SequenceKind::Tum);
+  EXPECT_EQ(crowd.frames.size(), 300u);
+  EXPECT_TRUE(crowd.hasDepth());
+  EXPECT_EQ(crowd.config.camera.name, "bonn");
+  EXPECT_DOUBLE_EQ(crowd.config.camera.fx, 542.822841);
+  EXPECT_DOUBLE_EQ(crowd.config.camera.k1, 0.039903);
+  EXPECT_EQ(crowd.frames_expected, 0);  // not catalogued
+  EXPECT_FALSE(crowd.groundtruth.empty());
+  // The folder by path takes the same camera from its name.
+  EXPECT_EQ(openSequence(crowd.root, sharedRoot()).config.camera.name, "bonn");
+}
+
 TEST(Sequence, CalibrationP0OverridesTheConfig) {
   // A KITTI folder whose calib.txt differs from config/kitti_00-02.yaml.
   const fs::path data = test::scratchDir("kitti_calib");
@@ -379,6 +395,7 @@ TEST(SequenceErrors, UnknownTumName) {
   EXPECT_TRUE(contains(message, "tum/fr1_xyz")) << message;
   EXPECT_TRUE(contains(openError("kitti/99"), "kitti/99: unknown KITTI odometry sequence"));
   EXPECT_TRUE(contains(openError("no/such/folder"), "no/such/folder: no such folder"));
+  EXPECT_TRUE(contains(openError("bonn/Crowd!"), "bonn/Crowd!: not a Bonn RGB-D Dynamic sequence name"));
 }
 
 TEST(SequenceErrors, NotFoundSaysWhereItLookedAndFallsBackToNothing) {
@@ -398,6 +415,13 @@ TEST(SequenceErrors, NotFoundSaysWhereItLookedAndFallsBackToNothing) {
     EXPECT_TRUE(contains(message, "tools/fetch_dataset.sh tum/fr2_desk")) << message;
     EXPECT_TRUE(contains(message, "freiburg2/rgbd_dataset_freiburg2_desk.tgz")) << message;
     EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+  try {
+    openSequence("bonn/balloon", options);
+    ADD_FAILURE() << "no error";
+  } catch (const SequenceNotFound& e) {
+    EXPECT_TRUE(contains(e.what(), (empty / "bonn" / "rgbd_bonn_balloon").string())) << e.what();
+    EXPECT_TRUE(contains(e.what(), "rgbd_dynamic2019/rgbd_bonn_balloon.zip")) << e.what();
   }
   try {
     openSequence("kitti/05", options);

@@ -145,8 +145,8 @@ Command addRunCommand(CLI::App& app) {
   Command command;
   CLI::App* cli = app.add_subcommand("run", "Run SLAM on a sequence");
   cli->add_option("--seq", options->seq,
-                  "Sequence: tum/<name> (e.g. tum/fr1_xyz), kitti/<NN> (e.g. kitti/00), or a folder in TUM or "
-                  "KITTI layout")
+                  "Sequence: tum/<name> (e.g. tum/fr1_xyz), kitti/<NN> (e.g. kitti/00), bonn/<name> (e.g. "
+                  "bonn/crowd), or a folder in TUM or KITTI layout")
       ->required();
   cli->add_option("--config", options->sequence.config_path,
                   "Camera and pipeline YAML (ours or an ORB-SLAM2 settings file) (default: config/<camera>.yaml "

@@ -198,6 +198,32 @@ Located locateKitti(const std::string& spec, const SequenceOptions& options) {
                              fetchDataRoot(options) + "/kitti/poses/" + nn + ".txt exist");
 }
 
+// The Bonn RGB-D Dynamic dataset (Palazzolo et al., IROS 2019): TUM layout,
+// its own camera (config/bonn.yaml), one zip per sequence on the dataset's
+// page. No frame counts are catalogued, so a partial copy is not flagged.
+constexpr const char* kBonnPrefix = "rgbd_bonn_";
+constexpr const char* kBonnUrl = "https://www.ipb.uni-bonn.de/html/projects/rgbd_dynamic2019/";
+
+Located locateBonn(const std::string& spec, const SequenceOptions& options) {
+  const std::string short_name = spec.substr(5);
+  static const std::regex kName(R"([a-z0-9_]+)");
+  if (!std::regex_match(short_name, kName))
+    throw InputError(spec, 0,
+                     "not a Bonn RGB-D Dynamic sequence name; names are as on the dataset's page without "
+                     "'rgbd_bonn_', e.g. bonn/crowd, bonn/balloon, bonn/person_tracking");
+  const std::string folder_name = kBonnPrefix + short_name;
+  std::vector<std::string> looked;
+  for (const std::string& root : dataSearchRoots(options)) {
+    for (const fs::path& candidate : {fs::path(root) / "bonn" / folder_name, fs::path(root) / folder_name}) {
+      looked.push_back(candidate.string());
+      if (fs::is_directory(candidate)) return {candidate, SequenceKind::Tum, "bonn", {}, 0};
+    }
+  }
+  throw SequenceNotFound(spec, 0,
+                         "sequence not found; looked in " + joined(looked, ", ") + ". Download " + kBonnUrl +
+                             folder_name + ".zip and unpack it into " + fetchDataRoot(options) + "/bonn/");
+}
+
 Located locateFolder(const std::string& spec) {
   const fs::path folder = spec;
   fs::path normalized = fs::absolute(folder).lexically_normal();
@@ -207,7 +233,8 @@ Located locateFolder(const std::string& spec) {
   static const std::regex kKittiName(R"(\d{2})");
   std::smatch match;
   const bool tum_named = std::regex_match(folder_name, match, kTumName);
-  const std::string tum_camera = tum_named ? "tum_fr" + match[1].str() : "";
+  std::string tum_camera = tum_named ? "tum_fr" + match[1].str() : "";
+  if (startsWith(folder_name, kBonnPrefix)) tum_camera = "bonn";
 
   if (tum_named || fs::exists(folder / "rgb.txt")) return {folder, SequenceKind::Tum, tum_camera, {}};
   if (fs::is_directory(folder / "image_0") && fs::exists(folder / "times.txt")) {
@@ -248,7 +275,7 @@ double pathLength(const std::vector<StampedPose>& poses) {
 }
 
 Sequence openSequence(const std::string& spec, const SequenceOptions& options) {
-  if (spec.empty()) throw InputError("--seq: empty sequence name (tum/<name>, kitti/<NN> or a folder)");
+  if (spec.empty()) throw InputError("--seq: empty sequence name (tum/<name>, kitti/<NN>, bonn/<name> or a folder)");
   Located located;
   if (fs::is_directory(spec)) {
     located = locateFolder(spec);
@@ -256,11 +283,14 @@ Sequence openSequence(const std::string& spec, const SequenceOptions& options) {
     located = locateTum(spec, options);
   } else if (startsWith(spec, "kitti/")) {
     located = locateKitti(spec, options);
+  } else if (startsWith(spec, "bonn/")) {
+    located = locateBonn(spec, options);
   } else if (fs::exists(spec)) {
     throw InputError(spec, 0, "is a file, not a sequence folder");
   } else {
     throw InputError(spec, 0,
-                     "no such folder, and not a sequence name (tum/<name> such as tum/fr1_xyz, or kitti/<NN>)");
+                     "no such folder, and not a sequence name (tum/<name> such as tum/fr1_xyz, kitti/<NN>, or "
+                     "bonn/<name> such as bonn/crowd)");
   }
 
   Sequence sequence;

@@ -142,7 +142,9 @@ class MapIoTest : public ::testing::Test {
     try {
       const MapFileHeader header = readMapHeader(path);
       Map map;
-      loadMapDatabase(path, map, camera_, pyramid_);
+      std::vector<ObjectLandmark> objects;
+      std::vector<std::string> class_names;
+      loadMapDatabase(path, map, camera_, pyramid_, &objects, &class_names);
     } catch (const InputError& e) {
       return e.what();
     }
@@ -401,7 +403,8 @@ TEST_F(MapIoTest, RefusesInconsistentLinks) {
 
 // A damaged schema (found by the random damage below, 4000 copies): SQLite
 // quotes the broken CREATE TABLE, newline included, and a primary key that is
-// no longer one gives every row the same id. Both are refused in one line.
+// no longer one gives every row the same id. Both are refused in one line (the
+// second, once refused by the loader's id check, now by the column check).
 TEST_F(MapIoTest, RefusesADamagedSchemaInOneLine) {
   const std::string quoted_newline = save("newline.sqlite");
   edit(quoted_newline,
@@ -416,7 +419,8 @@ TEST_F(MapIoTest, RefusesADamagedSchemaInOneLine) {
   edit(no_primary_key,
        "PRAGMA writable_schema = ON; UPDATE sqlite_master SET sql = replace(sql, 'id INTEGER PRIMARY KEY, x REAL', "
        "'id INTEGER, x REAL') WHERE name = 'map_points'");
-  EXPECT_EQ(refusal(no_primary_key), no_primary_key + ": inconsistent map: map point id 0 is not unique or not >= 0");
+  EXPECT_EQ(refusal(no_primary_key), no_primary_key + ": the map's tables are not as vslam writes them: column 1 of "
+                                                      "map_points is 'id INTEGER', not 'id INTEGER PRIMARY KEY 1'");
 }
 
 // Ids near the end of `long` (found reading the loader beside the map_file
@@ -462,14 +466,64 @@ TEST_F(MapIoTest, RefusesIdsTooLargeToCountOn) {
 // A schema that computes a column (found reading the loader beside the map_file
 // fuzz target, which timed out on it: 38 s; a Release `vslam run --load-map`
 // peaked at 1.9 GB before its refusal): every keypoint's descriptor became
-// zeroblob(N), built by SQLite and copied by us. SQLite now refuses any value
-// over 1 MB in a file read as a map.
+// zeroblob(N), built by SQLite and copied by us. The column check now refuses
+// such a schema before any row is read; SQLite still refuses any value over
+// 1 MB in a file read as a map, a stored one too (a map's longest is a path).
 TEST_F(MapIoTest, RefusesComputedValuesLargerThanAnyAMapHolds) {
   const std::string path = save("computed.sqlite");
   edit(path,
        "PRAGMA writable_schema = ON; UPDATE sqlite_master SET sql = replace(sql, 'descriptor BLOB NOT NULL', "
        "'descriptor BLOB AS (zeroblob(100000000))') WHERE name = 'keypoints'");
-  EXPECT_EQ(refusal(path), path + ": SQLite: step: string or blob too big");
+  EXPECT_EQ(refusal(path), path + ": the map's tables are not as vslam writes them: column 18 of keypoints is "
+                                  "'descriptor BLOB GENERATED VIRTUAL', not 'descriptor BLOB NOT NULL'");
+  const std::string stored = save("stored.sqlite");
+  edit(stored, "UPDATE map_info SET value = printf('%.*c', 2000000, 'x') WHERE key = 'sequence'");
+  EXPECT_EQ(refusal(stored), stored + ": SQLite: step: string or blob too big");
+}
+
+// A map's schema is data too: a crafted file could compute a column (SQLite
+// runs the expression on every read), hide a view or a trigger, or turn a
+// table into a virtual one. Every table must have exactly the columns the
+// writer creates, and there must be no views or triggers.
+TEST_F(MapIoTest, RefusesTablesThatAreNotAsTheWriterMakesThem) {
+  struct Case {
+    std::string sql;
+    std::string reason;
+  };
+  const std::string differs = "the map's tables are not as vslam writes them: ";
+  auto rewrite = [](const std::string& table, const std::string& from, const std::string& to) {
+    return "PRAGMA writable_schema = ON; UPDATE sqlite_master SET sql = replace(sql, '" + from + "', '" + to +
+           "') WHERE name = '" + table + "'";
+  };
+  const std::vector<Case> cases = {
+      {rewrite("keypoints", "descriptor BLOB NOT NULL", "descriptor BLOB AS (zeroblob(32))"),
+       differs + "column 18 of keypoints is 'descriptor BLOB GENERATED VIRTUAL', not 'descriptor BLOB NOT NULL'"},
+      {rewrite("keypoints", "octave INTEGER NOT NULL", "octave BLOB NOT NULL"),
+       differs + "column 10 of keypoints is 'octave BLOB NOT NULL', not 'octave INTEGER NOT NULL'"},
+      {rewrite("map_points", "visible INTEGER NOT NULL", "visible INTEGER"),
+       differs + "column 13 of map_points is 'visible INTEGER', not 'visible INTEGER NOT NULL'"},
+      {"ALTER TABLE camera ADD COLUMN note TEXT", differs + "camera has 18 columns, not 17"},
+      {"DROP TABLE bow_words; CREATE VIRTUAL TABLE bow_words USING fts5(keyframe_id, word_id, weight)",
+       differs + "bow_words is a virtual table"},
+      {"CREATE VIEW keyframe_count AS SELECT COUNT(*) FROM keyframes",
+       "the map has a view named keyframe_count (vslam writes no views or triggers)"},
+      {"CREATE TRIGGER classes_added AFTER INSERT ON classes BEGIN SELECT 1; END",
+       "the map has a trigger named classes_added (vslam writes no views or triggers)"},
+  };
+  for (size_t c = 0; c < cases.size(); ++c) {
+    const std::string path = save("case" + std::to_string(c) + ".sqlite");
+    edit(path, cases[c].sql);
+    EXPECT_EQ(refusal(path), path + ": " + cases[c].reason) << cases[c].sql;
+  }
+}
+
+// Functions a crafted schema names (in a CHECK constraint or an index, which
+// SQLite evaluates while checking the file) run only when SQLite deems them
+// harmless: a map is read with trusted_schema off.
+TEST_F(MapIoTest, ReadsMapsWithAnUntrustedSchema) {
+  const std::string path = save("map.sqlite");
+  SqliteDatabase db(path, SqliteDatabase::Access::ReadOnly);
+  EXPECT_EQ(db.queryInteger("PRAGMA trusted_schema"), 0);
 }
 
 // Random damage, as a disk or a bad copy does it: bytes overwritten anywhere in

@@ -78,10 +78,23 @@ CREATE TABLE object_merged_classes(object_id INTEGER NOT NULL REFERENCES objects
   PRIMARY KEY(object_id, class_name)) WITHOUT ROWID;
 )sql";
 
-const std::vector<std::string> kTables = {"map_info",     "camera",       "classes",      "keyframes",
-                                          "keypoints",    "bow_words",    "bow_features", "map_points",
-                                          "observations", "covisibility", "loop_edges",   "objects",
-                                          "object_points", "object_keyframes", "object_merged_classes"};
+// The writer's own schema in a database of its own: what a map file's tables
+// are compared with, so that no second copy of the columns can drift from it.
+class ExpectedSchema {
+ public:
+  ExpectedSchema() : db_(":memory:", SqliteDatabase::Access::Create) { db_.execute(kSchema); }
+  SqliteDatabase& db() { return db_; }
+  // Our tables, in the order the writer creates them.
+  std::vector<std::string> tables() {
+    std::vector<std::string> names;
+    SqliteStatement rows = db_.prepare("SELECT name FROM sqlite_master WHERE type = 'table' ORDER BY rowid");
+    while (rows.step()) names.push_back(rows.text(0));
+    return names;
+  }
+
+ private:
+  SqliteDatabase db_;
+};
 
 std::string nowUtc() {
   const std::time_t now = std::time(nullptr);
@@ -273,11 +286,77 @@ void checkIntegrity(SqliteDatabase& db) {
   throw InputError(db.path(), 0, "corrupt map file (SQLite integrity check: " + first + ")");
 }
 
+// Text from a file in a refusal: one line, and short (a name may be 1 MB long).
+std::string shown(std::string text) {
+  constexpr size_t kMaxShown = 120;
+  if (text.size() > kMaxShown) text = text.substr(0, kMaxShown) + "...";
+  for (char& c : text)
+    if (c == '\n' || c == '\r') c = ' ';
+  return text;
+}
+
+// A table's columns as PRAGMA table_xinfo gives them, one text each: name,
+// declared type, NOT NULL, default, place in the primary key (1 for its first
+// column), and whether SQLite hides the column or computes it on every read.
+std::vector<std::string> columnsOf(SqliteDatabase& db, const std::string& table) {
+  SqliteStatement rows =
+      db.prepare("SELECT name, type, \"notnull\", dflt_value, pk, hidden FROM pragma_table_xinfo(?) ORDER BY cid");
+  rows.bind(1, table);
+  std::vector<std::string> columns;
+  while (rows.step()) {
+    std::string column = rows.text(0);
+    if (!rows.text(1).empty()) column += " " + rows.text(1);
+    if (rows.integer(2) != 0) column += " NOT NULL";
+    if (!rows.isNull(3)) column += " DEFAULT " + rows.text(3);
+    if (rows.integer(4) != 0) column += " PRIMARY KEY " + std::to_string(rows.integer(4));
+    const long long hidden = rows.integer(5);
+    if (hidden == 1) column += " HIDDEN";
+    if (hidden == 2) column += " GENERATED VIRTUAL";
+    if (hidden == 3) column += " GENERATED STORED";
+    if (hidden < 0 || hidden > 3) column += " hidden " + std::to_string(hidden);
+    columns.push_back(column);
+  }
+  return columns;
+}
+
+// A map's schema is the file's own, and SQLite obeys it on every read: a
+// crafted one could compute a column, drop a NOT NULL or a primary key, or
+// make a table virtual. Each of `table`'s columns must be the writer's.
+void checkColumns(SqliteDatabase& db, ExpectedSchema& expected, const std::string& table) {
+  const std::string& path = db.path();
+  const std::string differs = "the map's tables are not as vslam writes them: ";
+  SqliteStatement kind =
+      db.prepare("SELECT sql LIKE 'CREATE VIRTUAL TABLE%' FROM sqlite_master WHERE type = 'table' AND name = ?");
+  kind.bind(1, table);
+  if (kind.step() && kind.integer(0) != 0) throw InputError(path, 0, differs + table + " is a virtual table");
+  const std::vector<std::string> ours = columnsOf(expected.db(), table), theirs = columnsOf(db, table);
+  if (theirs.size() != ours.size())
+    throw InputError(path, 0, differs + table + " has " + std::to_string(theirs.size()) + " columns, not " +
+                                  std::to_string(ours.size()));
+  for (size_t c = 0; c < ours.size(); ++c)
+    if (theirs[c] != ours[c])
+      throw InputError(path, 0, differs + "column " + std::to_string(c + 1) + " of " + table + " is '" +
+                                    shown(theirs[c]) + "', not '" + ours[c] + "'");
+}
+
+// The writer makes none, and a map is only read: one would be there for no good reason.
+void refuseViewsAndTriggers(SqliteDatabase& db) {
+  SqliteStatement extra =
+      db.prepare("SELECT type, name FROM sqlite_master WHERE type IN ('view', 'trigger') ORDER BY rowid LIMIT 1");
+  if (extra.step())
+    throw InputError(db.path(), 0, "the map has a " + extra.text(0) + " named " + shown(extra.text(1)) +
+                                       " (vslam writes no views or triggers)");
+}
+
 MapFileHeader readHeader(SqliteDatabase& db) {
   const std::string& path = db.path();
   checkIntegrity(db);
   for (const std::string& table : {std::string("map_info"), std::string("camera")})
     if (!db.hasTable(table)) throw InputError(path, 0, "not a vslam map (no table " + table + ")");
+  ExpectedSchema expected;
+  refuseViewsAndTriggers(db);
+  // map_info is read before the version is known: every version keeps its two columns.
+  checkColumns(db, expected, "map_info");
   std::map<std::string, std::string> info;
   SqliteStatement rows = db.prepare("SELECT key, value FROM map_info");
   while (rows.step()) info[rows.text(0)] = rows.text(1);
@@ -304,8 +383,10 @@ MapFileHeader readHeader(SqliteDatabase& db) {
                          " is newer than this vslam reads (up to " + std::to_string(kMapSchemaVersion) +
                          "): update vslam");
   if (header.schema_version < 1) throw InputError(path, 0, "map schema version " + value("schema_version") + " is not valid");
-  for (const std::string& table : kTables)
+  for (const std::string& table : expected.tables()) {
     if (!db.hasTable(table)) throw InputError(path, 0, "map schema " + std::to_string(header.schema_version) + " has no table " + table);
+    checkColumns(db, expected, table);
+  }
   header.mode = parseMode(path, value("mode"));
   header.orb_levels = integer("orb_levels");
   try {

@@ -481,6 +481,41 @@ TEST_F(MapIoTest, RefusesComputedValuesLargerThanAnyAMapHolds) {
   EXPECT_EQ(refusal(stored), stored + ": SQLite: step: string or blob too big");
 }
 
+// SQLite keeps 64-bit integers, and the loader cast them to int (or to a
+// byte): 2^32 + 1 became 1, inside every range checked after the cast. Each
+// value too large for its column is refused whole, with its row.
+TEST_F(MapIoTest, RefusesIntegersOutsideTheirColumnsRange) {
+  struct Case {
+    std::string sql;
+    std::string reason;
+  };
+  const std::string ints = ", out of range (-2147483648..2147483647)";
+  const std::vector<Case> cases = {
+      {"UPDATE keypoints SET octave = 4294967297 WHERE keyframe_id = 1 AND idx = 3",
+       "keyframe 1's keypoint 3's octave is 4294967297, out of range (0..7)"},
+      {"UPDATE keypoints SET class_id = 4294967295 WHERE keyframe_id = 1 AND idx = 3",
+       "keyframe 1's keypoint 3's class_id is 4294967295" + ints},
+      {"UPDATE keypoints SET red = 256 WHERE keyframe_id = 1 AND idx = 3",
+       "keyframe 1's keypoint 3's red is 256, out of range (0..255)"},
+      {"UPDATE keyframes SET frame_index = 4294967302 WHERE id = 2", "keyframe 2's frame_index is 4294967302" + ints},
+      {"UPDATE camera SET width = 4294967936", "the camera's width is 4294967936" + ints},
+      {"UPDATE bow_words SET word_id = 4294967346 WHERE keyframe_id = 0 AND word_id = 5",
+       "keyframe 0's bow word_id is 4294967346, out of range (0..4294967295)"},
+      {"UPDATE bow_features SET node_id = -1 WHERE keyframe_id = 0 AND node_id = 0 AND idx = 0",
+       "keyframe 0's bow node_id is -1, out of range (0..4294967295)"},
+      {"UPDATE map_points SET visible = 4294967301 WHERE id = 7", "map point 7's visible is 4294967301" + ints},
+      {"UPDATE map_points SET green = -1 WHERE id = 7", "map point 7's green is -1, out of range (0..255)"},
+      {"UPDATE covisibility SET weight = 8589934592 WHERE keyframe_id = 0 AND other_id = 1",
+       "the covisibility weight of keyframe 0 with keyframe 1 is 8589934592" + ints},
+      {"UPDATE objects SET class_id = 4294967352 WHERE id = 0", "object 0's class_id is 4294967352" + ints},
+  };
+  for (size_t c = 0; c < cases.size(); ++c) {
+    const std::string path = save("case" + std::to_string(c) + ".sqlite");
+    edit(path, cases[c].sql);
+    EXPECT_EQ(refusal(path), path + ": " + cases[c].reason) << cases[c].sql;
+  }
+}
+
 // A map's schema is data too: a crafted file could compute a column (SQLite
 // runs the expression on every read), hide a view or a trigger, or turn a
 // table into a virtual one. Every table must have exactly the columns the

@@ -7,11 +7,15 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <memory>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
 
 #include "map_test_support.hpp"
 
@@ -514,6 +518,47 @@ TEST_F(MapIoTest, RefusesIntegersOutsideTheirColumnsRange) {
     edit(path, cases[c].sql);
     EXPECT_EQ(refusal(path), path + ": " + cases[c].reason) << cases[c].sql;
   }
+}
+
+// What spdlog's default logger writes while one lives (the loader's warnings).
+class CapturedLog {
+ public:
+  CapturedLog() : previous_(spdlog::default_logger()) {
+    spdlog::set_default_logger(
+        std::make_shared<spdlog::logger>("captured", std::make_shared<spdlog::sinks::ostream_sink_st>(text_)));
+  }
+  ~CapturedLog() { spdlog::set_default_logger(previous_); }
+  CapturedLog(const CapturedLog&) = delete;
+  CapturedLog& operator=(const CapturedLog&) = delete;
+  std::string text() const { return text_.str(); }
+
+ private:
+  std::ostringstream text_;
+  std::shared_ptr<spdlog::logger> previous_;
+};
+
+// object_points may name a map point the file does not hold, and the writer
+// itself writes such rows: objects are grouped from every live point, but a
+// point that no live keyframe sees, or whose keypoints an earlier point
+// holds, is not saved. The loader leaves those rows out, and says so.
+TEST_F(MapIoTest, LeavesOutObjectPointsThatAreNotInTheMap) {
+  const std::string path = save("map.sqlite");
+  edit(path, "INSERT INTO object_points VALUES(0, 777, 0); INSERT INTO object_points VALUES(0, 778, 1)");
+  Map loaded;
+  std::vector<ObjectLandmark> objects;
+  std::string log;
+  {
+    const CapturedLog captured;
+    loadMapDatabase(path, loaded, camera_, pyramid_, &objects);
+    log = captured.text();
+  }
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].point_ids, (std::vector<long>{0, 5, 10}));
+  EXPECT_EQ(objects[0].rejected_point_ids, (std::vector<long>{15}));
+  EXPECT_NE(log.find(path + ": 2 object_points rows name map points the map does not hold (the first: object 0, "
+                            "point 777); they are left out"),
+            std::string::npos)
+      << log;
 }
 
 // A map's schema is data too: a crafted file could compute a column (SQLite

@@ -771,6 +771,11 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
     SqliteStatement members = db.prepare("SELECT map_point_id, rejected FROM object_points WHERE object_id = ? ORDER BY map_point_id");
     SqliteStatement seen_by = db.prepare("SELECT keyframe_id FROM object_keyframes WHERE object_id = ? ORDER BY keyframe_id");
     SqliteStatement merged = db.prepare("SELECT class_name FROM object_merged_classes WHERE object_id = ? ORDER BY class_name");
+    // Objects are grouped from every live point, but the writer saves only the
+    // points a live keyframe sees (each keypoint held by one): a row may name a
+    // point the file does not hold. It is left out, not refused.
+    long missing = 0;
+    std::string first_missing;
     while (rows.step()) {
       ObjectLandmark object;
       const long long id = rows.integer(0);
@@ -782,7 +787,14 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
       for (Vec3* v : {&object.centroid, &object.box_min, &object.box_max})
         for (int k = 0; k < 3; ++k) (*v)(k) = rows.real(column++);
       members.bind(1, id);
-      while (members.step()) (members.integer(1) ? object.rejected_point_ids : object.point_ids).push_back(static_cast<long>(members.integer(0)));
+      while (members.step()) {
+        const long point = static_cast<long>(members.integer(0));
+        if (point_by_id.count(point) == 0) {
+          if (missing++ == 0) first_missing = "object " + std::to_string(id) + ", point " + std::to_string(point);
+          continue;
+        }
+        (members.integer(1) ? object.rejected_point_ids : object.point_ids).push_back(point);
+      }
       members.reset();
       seen_by.bind(1, id);
       while (seen_by.step()) object.keyframe_ids.push_back(static_cast<long>(seen_by.integer(0)));
@@ -792,6 +804,9 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
       merged.reset();
       objects->push_back(std::move(object));
     }
+    if (missing > 0)
+      spdlog::warn("{}: {} object_points rows name map points the map does not hold (the first: {}); they are left out",
+                   path, missing, first_missing);
   }
 }
 

@@ -7,11 +7,15 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <memory>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
 
 #include "map_test_support.hpp"
 
@@ -142,7 +146,9 @@ class MapIoTest : public ::testing::Test {
     try {
       const MapFileHeader header = readMapHeader(path);
       Map map;
-      loadMapDatabase(path, map, camera_, pyramid_);
+      std::vector<ObjectLandmark> objects;
+      std::vector<std::string> class_names;
+      loadMapDatabase(path, map, camera_, pyramid_, &objects, &class_names);
     } catch (const InputError& e) {
       return e.what();
     }
@@ -401,7 +407,8 @@ TEST_F(MapIoTest, RefusesInconsistentLinks) {
 
 // A damaged schema (found by the random damage below, 4000 copies): SQLite
 // quotes the broken CREATE TABLE, newline included, and a primary key that is
-// no longer one gives every row the same id. Both are refused in one line.
+// no longer one gives every row the same id. Both are refused in one line (the
+// second, once refused by the loader's id check, now by the column check).
 TEST_F(MapIoTest, RefusesADamagedSchemaInOneLine) {
   const std::string quoted_newline = save("newline.sqlite");
   edit(quoted_newline,
@@ -416,7 +423,8 @@ TEST_F(MapIoTest, RefusesADamagedSchemaInOneLine) {
   edit(no_primary_key,
        "PRAGMA writable_schema = ON; UPDATE sqlite_master SET sql = replace(sql, 'id INTEGER PRIMARY KEY, x REAL', "
        "'id INTEGER, x REAL') WHERE name = 'map_points'");
-  EXPECT_EQ(refusal(no_primary_key), no_primary_key + ": inconsistent map: map point id 0 is not unique or not >= 0");
+  EXPECT_EQ(refusal(no_primary_key), no_primary_key + ": the map's tables are not as vslam writes them: column 1 of "
+                                                      "map_points is 'id INTEGER', not 'id INTEGER PRIMARY KEY 1'");
 }
 
 // Ids near the end of `long` (found reading the loader beside the map_file
@@ -462,14 +470,140 @@ TEST_F(MapIoTest, RefusesIdsTooLargeToCountOn) {
 // A schema that computes a column (found reading the loader beside the map_file
 // fuzz target, which timed out on it: 38 s; a Release `vslam run --load-map`
 // peaked at 1.9 GB before its refusal): every keypoint's descriptor became
-// zeroblob(N), built by SQLite and copied by us. SQLite now refuses any value
-// over 1 MB in a file read as a map.
+// zeroblob(N), built by SQLite and copied by us. The column check now refuses
+// such a schema before any row is read; SQLite still refuses any value over
+// 1 MB in a file read as a map, a stored one too (a map's longest is a path).
 TEST_F(MapIoTest, RefusesComputedValuesLargerThanAnyAMapHolds) {
   const std::string path = save("computed.sqlite");
   edit(path,
        "PRAGMA writable_schema = ON; UPDATE sqlite_master SET sql = replace(sql, 'descriptor BLOB NOT NULL', "
        "'descriptor BLOB AS (zeroblob(100000000))') WHERE name = 'keypoints'");
-  EXPECT_EQ(refusal(path), path + ": SQLite: step: string or blob too big");
+  EXPECT_EQ(refusal(path), path + ": the map's tables are not as vslam writes them: column 18 of keypoints is "
+                                  "'descriptor BLOB GENERATED VIRTUAL', not 'descriptor BLOB NOT NULL'");
+  const std::string stored = save("stored.sqlite");
+  edit(stored, "UPDATE map_info SET value = printf('%.*c', 2000000, 'x') WHERE key = 'sequence'");
+  EXPECT_EQ(refusal(stored), stored + ": SQLite: step: string or blob too big");
+}
+
+// SQLite keeps 64-bit integers, and the loader cast them to int (or to a
+// byte): 2^32 + 1 became 1, inside every range checked after the cast. Each
+// value too large for its column is refused whole, with its row.
+TEST_F(MapIoTest, RefusesIntegersOutsideTheirColumnsRange) {
+  struct Case {
+    std::string sql;
+    std::string reason;
+  };
+  const std::string ints = ", out of range (-2147483648..2147483647)";
+  const std::vector<Case> cases = {
+      {"UPDATE keypoints SET octave = 4294967297 WHERE keyframe_id = 1 AND idx = 3",
+       "keyframe 1's keypoint 3's octave is 4294967297, out of range (0..7)"},
+      {"UPDATE keypoints SET class_id = 4294967295 WHERE keyframe_id = 1 AND idx = 3",
+       "keyframe 1's keypoint 3's class_id is 4294967295" + ints},
+      {"UPDATE keypoints SET red = 256 WHERE keyframe_id = 1 AND idx = 3",
+       "keyframe 1's keypoint 3's red is 256, out of range (0..255)"},
+      {"UPDATE keyframes SET frame_index = 4294967302 WHERE id = 2", "keyframe 2's frame_index is 4294967302" + ints},
+      {"UPDATE camera SET width = 4294967936", "the camera's width is 4294967936" + ints},
+      {"UPDATE bow_words SET word_id = 4294967346 WHERE keyframe_id = 0 AND word_id = 5",
+       "keyframe 0's bow word_id is 4294967346, out of range (0..4294967295)"},
+      {"UPDATE bow_features SET node_id = -1 WHERE keyframe_id = 0 AND node_id = 0 AND idx = 0",
+       "keyframe 0's bow node_id is -1, out of range (0..4294967295)"},
+      {"UPDATE map_points SET visible = 4294967301 WHERE id = 7", "map point 7's visible is 4294967301" + ints},
+      {"UPDATE map_points SET green = -1 WHERE id = 7", "map point 7's green is -1, out of range (0..255)"},
+      {"UPDATE covisibility SET weight = 8589934592 WHERE keyframe_id = 0 AND other_id = 1",
+       "the covisibility weight of keyframe 0 with keyframe 1 is 8589934592" + ints},
+      {"UPDATE objects SET class_id = 4294967352 WHERE id = 0", "object 0's class_id is 4294967352" + ints},
+  };
+  for (size_t c = 0; c < cases.size(); ++c) {
+    const std::string path = save("case" + std::to_string(c) + ".sqlite");
+    edit(path, cases[c].sql);
+    EXPECT_EQ(refusal(path), path + ": " + cases[c].reason) << cases[c].sql;
+  }
+}
+
+// What spdlog's default logger writes while one lives (the loader's warnings).
+class CapturedLog {
+ public:
+  CapturedLog() : previous_(spdlog::default_logger()) {
+    spdlog::set_default_logger(
+        std::make_shared<spdlog::logger>("captured", std::make_shared<spdlog::sinks::ostream_sink_st>(text_)));
+  }
+  ~CapturedLog() { spdlog::set_default_logger(previous_); }
+  CapturedLog(const CapturedLog&) = delete;
+  CapturedLog& operator=(const CapturedLog&) = delete;
+  std::string text() const { return text_.str(); }
+
+ private:
+  std::ostringstream text_;
+  std::shared_ptr<spdlog::logger> previous_;
+};
+
+// object_points may name a map point the file does not hold, and the writer
+// itself writes such rows: objects are grouped from every live point, but a
+// point that no live keyframe sees, or whose keypoints an earlier point
+// holds, is not saved. The loader leaves those rows out, and says so.
+TEST_F(MapIoTest, LeavesOutObjectPointsThatAreNotInTheMap) {
+  const std::string path = save("map.sqlite");
+  edit(path, "INSERT INTO object_points VALUES(0, 777, 0); INSERT INTO object_points VALUES(0, 778, 1)");
+  Map loaded;
+  std::vector<ObjectLandmark> objects;
+  std::string log;
+  {
+    const CapturedLog captured;
+    loadMapDatabase(path, loaded, camera_, pyramid_, &objects);
+    log = captured.text();
+  }
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].point_ids, (std::vector<long>{0, 5, 10}));
+  EXPECT_EQ(objects[0].rejected_point_ids, (std::vector<long>{15}));
+  EXPECT_NE(log.find(path + ": 2 object_points rows name map points the map does not hold (the first: object 0, "
+                            "point 777); they are left out"),
+            std::string::npos)
+      << log;
+}
+
+// A map's schema is data too: a crafted file could compute a column (SQLite
+// runs the expression on every read), hide a view or a trigger, or turn a
+// table into a virtual one. Every table must have exactly the columns the
+// writer creates, and there must be no views or triggers.
+TEST_F(MapIoTest, RefusesTablesThatAreNotAsTheWriterMakesThem) {
+  struct Case {
+    std::string sql;
+    std::string reason;
+  };
+  const std::string differs = "the map's tables are not as vslam writes them: ";
+  auto rewrite = [](const std::string& table, const std::string& from, const std::string& to) {
+    return "PRAGMA writable_schema = ON; UPDATE sqlite_master SET sql = replace(sql, '" + from + "', '" + to +
+           "') WHERE name = '" + table + "'";
+  };
+  const std::vector<Case> cases = {
+      {rewrite("keypoints", "descriptor BLOB NOT NULL", "descriptor BLOB AS (zeroblob(32))"),
+       differs + "column 18 of keypoints is 'descriptor BLOB GENERATED VIRTUAL', not 'descriptor BLOB NOT NULL'"},
+      {rewrite("keypoints", "octave INTEGER NOT NULL", "octave BLOB NOT NULL"),
+       differs + "column 10 of keypoints is 'octave BLOB NOT NULL', not 'octave INTEGER NOT NULL'"},
+      {rewrite("map_points", "visible INTEGER NOT NULL", "visible INTEGER"),
+       differs + "column 13 of map_points is 'visible INTEGER', not 'visible INTEGER NOT NULL'"},
+      {"ALTER TABLE camera ADD COLUMN note TEXT", differs + "camera has 18 columns, not 17"},
+      {"DROP TABLE bow_words; CREATE VIRTUAL TABLE bow_words USING fts5(keyframe_id, word_id, weight)",
+       differs + "bow_words is a virtual table"},
+      {"CREATE VIEW keyframe_count AS SELECT COUNT(*) FROM keyframes",
+       "the map has a view named keyframe_count (vslam writes no views or triggers)"},
+      {"CREATE TRIGGER classes_added AFTER INSERT ON classes BEGIN SELECT 1; END",
+       "the map has a trigger named classes_added (vslam writes no views or triggers)"},
+  };
+  for (size_t c = 0; c < cases.size(); ++c) {
+    const std::string path = save("case" + std::to_string(c) + ".sqlite");
+    edit(path, cases[c].sql);
+    EXPECT_EQ(refusal(path), path + ": " + cases[c].reason) << cases[c].sql;
+  }
+}
+
+// Functions a crafted schema names (in a CHECK constraint or an index, which
+// SQLite evaluates while checking the file) run only when SQLite deems them
+// harmless: a map is read with trusted_schema off.
+TEST_F(MapIoTest, ReadsMapsWithAnUntrustedSchema) {
+  const std::string path = save("map.sqlite");
+  SqliteDatabase db(path, SqliteDatabase::Access::ReadOnly);
+  EXPECT_EQ(db.queryInteger("PRAGMA trusted_schema"), 0);
 }
 
 // Random damage, as a disk or a bad copy does it: bytes overwritten anywhere in

@@ -5,6 +5,7 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -78,10 +79,23 @@ CREATE TABLE object_merged_classes(object_id INTEGER NOT NULL REFERENCES objects
   PRIMARY KEY(object_id, class_name)) WITHOUT ROWID;
 )sql";
 
-const std::vector<std::string> kTables = {"map_info",     "camera",       "classes",      "keyframes",
-                                          "keypoints",    "bow_words",    "bow_features", "map_points",
-                                          "observations", "covisibility", "loop_edges",   "objects",
-                                          "object_points", "object_keyframes", "object_merged_classes"};
+// The writer's own schema in a database of its own: what a map file's tables
+// are compared with, so that no second copy of the columns can drift from it.
+class ExpectedSchema {
+ public:
+  ExpectedSchema() : db_(":memory:", SqliteDatabase::Access::Create) { db_.execute(kSchema); }
+  SqliteDatabase& db() { return db_; }
+  // Our tables, in the order the writer creates them.
+  std::vector<std::string> tables() {
+    std::vector<std::string> names;
+    SqliteStatement rows = db_.prepare("SELECT name FROM sqlite_master WHERE type = 'table' ORDER BY rowid");
+    while (rows.step()) names.push_back(rows.text(0));
+    return names;
+  }
+
+ private:
+  SqliteDatabase db_;
+};
 
 std::string nowUtc() {
   const std::time_t now = std::time(nullptr);
@@ -273,11 +287,89 @@ void checkIntegrity(SqliteDatabase& db) {
   throw InputError(db.path(), 0, "corrupt map file (SQLite integrity check: " + first + ")");
 }
 
+// A stored integer as a T in [low, high], by default T's whole range. SQLite
+// keeps 64 bits, and a plain cast would turn 2^32 + 1 into 1, inside every
+// range checked after it. `name()` names the value, built only for a refusal.
+template <typename T, typename Name>
+T storedAs(long long value, const std::string& path, Name&& name, long long low = std::numeric_limits<T>::min(),
+           long long high = std::numeric_limits<T>::max()) {
+  if (value < low || value > high)
+    throw InputError(path, 0, name() + " is " + std::to_string(value) + ", out of range (" + std::to_string(low) +
+                                  ".." + std::to_string(high) + ")");
+  return static_cast<T>(value);
+}
+
+// Text from a file in a refusal: one line, and short (a name may be 1 MB long).
+std::string shown(std::string text) {
+  constexpr size_t kMaxShown = 120;
+  if (text.size() > kMaxShown) text = text.substr(0, kMaxShown) + "...";
+  for (char& c : text)
+    if (c == '\n' || c == '\r') c = ' ';
+  return text;
+}
+
+// A table's columns as PRAGMA table_xinfo gives them, one text each: name,
+// declared type, NOT NULL, default, place in the primary key (1 for its first
+// column), and whether SQLite hides the column or computes it on every read.
+std::vector<std::string> columnsOf(SqliteDatabase& db, const std::string& table) {
+  SqliteStatement rows =
+      db.prepare("SELECT name, type, \"notnull\", dflt_value, pk, hidden FROM pragma_table_xinfo(?) ORDER BY cid");
+  rows.bind(1, table);
+  std::vector<std::string> columns;
+  while (rows.step()) {
+    std::string column = rows.text(0);
+    if (!rows.text(1).empty()) column += " " + rows.text(1);
+    if (rows.integer(2) != 0) column += " NOT NULL";
+    if (!rows.isNull(3)) column += " DEFAULT " + rows.text(3);
+    if (rows.integer(4) != 0) column += " PRIMARY KEY " + std::to_string(rows.integer(4));
+    const long long hidden = rows.integer(5);
+    if (hidden == 1) column += " HIDDEN";
+    if (hidden == 2) column += " GENERATED VIRTUAL";
+    if (hidden == 3) column += " GENERATED STORED";
+    if (hidden < 0 || hidden > 3) column += " hidden " + std::to_string(hidden);
+    columns.push_back(column);
+  }
+  return columns;
+}
+
+// A map's schema is the file's own, and SQLite obeys it on every read: a
+// crafted one could compute a column, drop a NOT NULL or a primary key, or
+// make a table virtual. Each of `table`'s columns must be the writer's.
+void checkColumns(SqliteDatabase& db, ExpectedSchema& expected, const std::string& table) {
+  const std::string& path = db.path();
+  const std::string differs = "the map's tables are not as vslam writes them: ";
+  SqliteStatement kind =
+      db.prepare("SELECT sql LIKE 'CREATE VIRTUAL TABLE%' FROM sqlite_master WHERE type = 'table' AND name = ?");
+  kind.bind(1, table);
+  if (kind.step() && kind.integer(0) != 0) throw InputError(path, 0, differs + table + " is a virtual table");
+  const std::vector<std::string> ours = columnsOf(expected.db(), table), theirs = columnsOf(db, table);
+  if (theirs.size() != ours.size())
+    throw InputError(path, 0, differs + table + " has " + std::to_string(theirs.size()) + " columns, not " +
+                                  std::to_string(ours.size()));
+  for (size_t c = 0; c < ours.size(); ++c)
+    if (theirs[c] != ours[c])
+      throw InputError(path, 0, differs + "column " + std::to_string(c + 1) + " of " + table + " is '" +
+                                    shown(theirs[c]) + "', not '" + ours[c] + "'");
+}
+
+// The writer makes none, and a map is only read: one would be there for no good reason.
+void refuseViewsAndTriggers(SqliteDatabase& db) {
+  SqliteStatement extra =
+      db.prepare("SELECT type, name FROM sqlite_master WHERE type IN ('view', 'trigger') ORDER BY rowid LIMIT 1");
+  if (extra.step())
+    throw InputError(db.path(), 0, "the map has a " + extra.text(0) + " named " + shown(extra.text(1)) +
+                                       " (vslam writes no views or triggers)");
+}
+
 MapFileHeader readHeader(SqliteDatabase& db) {
   const std::string& path = db.path();
   checkIntegrity(db);
   for (const std::string& table : {std::string("map_info"), std::string("camera")})
     if (!db.hasTable(table)) throw InputError(path, 0, "not a vslam map (no table " + table + ")");
+  ExpectedSchema expected;
+  refuseViewsAndTriggers(db);
+  // map_info is read before the version is known: every version keeps its two columns.
+  checkColumns(db, expected, "map_info");
   std::map<std::string, std::string> info;
   SqliteStatement rows = db.prepare("SELECT key, value FROM map_info");
   while (rows.step()) info[rows.text(0)] = rows.text(1);
@@ -304,8 +396,10 @@ MapFileHeader readHeader(SqliteDatabase& db) {
                          " is newer than this vslam reads (up to " + std::to_string(kMapSchemaVersion) +
                          "): update vslam");
   if (header.schema_version < 1) throw InputError(path, 0, "map schema version " + value("schema_version") + " is not valid");
-  for (const std::string& table : kTables)
+  for (const std::string& table : expected.tables()) {
     if (!db.hasTable(table)) throw InputError(path, 0, "map schema " + std::to_string(header.schema_version) + " has no table " + table);
+    checkColumns(db, expected, table);
+  }
   header.mode = parseMode(path, value("mode"));
   header.orb_levels = integer("orb_levels");
   try {
@@ -322,8 +416,8 @@ MapFileHeader readHeader(SqliteDatabase& db) {
   camera.step();
   PinholeCamera& c = header.camera;
   c.name = camera.text(0);
-  c.width = static_cast<int>(camera.integer(1));
-  c.height = static_cast<int>(camera.integer(2));
+  c.width = storedAs<int>(camera.integer(1), path, [] { return std::string("the camera's width"); });
+  c.height = storedAs<int>(camera.integer(2), path, [] { return std::string("the camera's height"); });
   int column = 3;
   for (double* field : {&c.fx, &c.fy, &c.cx, &c.cy, &c.k1, &c.k2, &c.p1, &c.p2, &c.k3, &c.bf, &c.fps, &c.depth_factor,
                         &c.th_depth, &c.max_depth_m})
@@ -489,9 +583,10 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
       // Ids are the tables' primary keys, so unique unless the schema itself was damaged.
       if (id <= previous_id) refuse("keyframe id " + std::to_string(id) + " is not unique or not >= 0");
       previous_id = id;
+      const std::string where = "keyframe " + std::to_string(id);
       Frame frame;
-      frame.id = storedId(rows.integer(1), path, "keyframe " + std::to_string(id) + "'s frame_id");
-      frame.index = static_cast<int>(rows.integer(2));
+      frame.id = storedId(rows.integer(1), path, where + "'s frame_id");
+      frame.index = storedAs<int>(rows.integer(2), path, [&] { return where + "'s frame_index"; });
       frame.timestamp = rows.real(3);
       frame.camera = &camera;
       frame.pyramid = &pyramid;
@@ -504,11 +599,13 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
       if (rows.integer(17) != 0) not_erase.insert(id);
       const long long count = rows.integer(18);
       const bool has_depth = rows.integer(19) != 0;
-      const std::string where = "keyframe " + std::to_string(id);
       if (count < 0 || count > 1000000) refuse(where + " has keypoint_count " + std::to_string(count));
       frame.descriptors = cv::Mat(static_cast<int>(count), kDescriptorBytes, CV_8U);
       keypoints.bind(1, static_cast<long long>(id));
       long long expected = 0;
+      auto field = [&](const char* column) {
+        return [&, column] { return where + "'s keypoint " + std::to_string(expected) + "'s " + column; };
+      };
       while (keypoints.step()) {
         if (keypoints.integer(0) != expected || expected >= count)
           refuse(where + "'s keypoints are not numbered 0.." + std::to_string(count - 1));
@@ -517,13 +614,14 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
         kp.size = static_cast<float>(keypoints.real(5));
         kp.angle = static_cast<float>(keypoints.real(6));
         kp.response = static_cast<float>(keypoints.real(7));
-        kp.octave = static_cast<int>(keypoints.integer(8));
-        if (kp.octave < 0 || kp.octave >= pyramid.levels) refuse(where + " has a keypoint at pyramid level " + std::to_string(kp.octave));
+        kp.octave = storedAs<int>(keypoints.integer(8), path, field("octave"), 0, pyramid.levels - 1);
         frame.keypoints.push_back(kp);
         frame.points.emplace_back(static_cast<float>(keypoints.real(3)), static_cast<float>(keypoints.real(4)));
-        frame.labels.push_back({static_cast<int>(keypoints.integer(9)), static_cast<int>(keypoints.integer(10))});
-        frame.colours.emplace_back(static_cast<uint8_t>(keypoints.integer(13)), static_cast<uint8_t>(keypoints.integer(12)),
-                                   static_cast<uint8_t>(keypoints.integer(11)));
+        frame.labels.push_back({storedAs<int>(keypoints.integer(9), path, field("class_id")),
+                                storedAs<int>(keypoints.integer(10), path, field("detection_id"))});
+        frame.colours.emplace_back(storedAs<uint8_t>(keypoints.integer(13), path, field("blue")),
+                                   storedAs<uint8_t>(keypoints.integer(12), path, field("green")),
+                                   storedAs<uint8_t>(keypoints.integer(11), path, field("red")));
         if (has_depth) {
           if (keypoints.isNull(14) || keypoints.isNull(15)) refuse(where + " has depth but a keypoint without it");
           frame.depth.push_back(static_cast<float>(keypoints.real(14)));
@@ -569,13 +667,22 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
   };
   {
     SqliteStatement words = db.prepare("SELECT keyframe_id, word_id, weight FROM bow_words");
-    while (words.step()) keyframeAt(words.integer(0), "the bow_words table")->bow[static_cast<WordId>(words.integer(1))] = words.real(2);
+    while (words.step()) {
+      KeyFrame* keyframe = keyframeAt(words.integer(0), "the bow_words table");
+      const auto word = storedAs<WordId>(words.integer(1), path, [&] {
+        return "keyframe " + std::to_string(keyframe->id()) + "'s bow word_id";
+      });
+      keyframe->bow[word] = words.real(2);
+    }
     SqliteStatement features = db.prepare("SELECT keyframe_id, node_id, idx FROM bow_features ORDER BY keyframe_id, node_id, idx");
     while (features.step()) {
       KeyFrame* keyframe = keyframeAt(features.integer(0), "the bow_features table");
       if (features.integer(2) < 0 || static_cast<size_t>(features.integer(2)) >= keyframe->size())
         refuse("the bow_features table names keypoint " + std::to_string(features.integer(2)) + " of keyframe " + std::to_string(keyframe->id()));
-      keyframe->bow_features[static_cast<NodeId>(features.integer(1))].push_back(static_cast<int>(features.integer(2)));
+      const auto node = storedAs<NodeId>(features.integer(1), path, [&] {
+        return "keyframe " + std::to_string(keyframe->id()) + "'s bow node_id";
+      });
+      keyframe->bow_features[node].push_back(static_cast<int>(features.integer(2)));
     }
   }
 
@@ -599,13 +706,15 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
       state.normal = Vec3(rows.real(7), rows.real(8), rows.real(9));
       state.min_distance = rows.real(10);
       state.max_distance = rows.real(11);
-      state.visible = static_cast<int>(rows.integer(12));
-      state.found = static_cast<int>(rows.integer(13));
-      state.class_id = static_cast<int>(rows.integer(14));
+      auto field = [&](const char* column) { return [&, column] { return where + "'s " + column; }; };
+      state.visible = storedAs<int>(rows.integer(12), path, field("visible"));
+      state.found = storedAs<int>(rows.integer(13), path, field("found"));
+      state.class_id = storedAs<int>(rows.integer(14), path, field("class_id"));
       state.class_confidence = rows.real(15);
-      state.colour = cv::Vec3b(static_cast<uint8_t>(rows.integer(18)), static_cast<uint8_t>(rows.integer(17)),
-                               static_cast<uint8_t>(rows.integer(16)));
-      state.confirmed_min_observations = static_cast<int>(rows.integer(19));
+      state.colour = cv::Vec3b(storedAs<uint8_t>(rows.integer(18), path, field("blue")),
+                               storedAs<uint8_t>(rows.integer(17), path, field("green")),
+                               storedAs<uint8_t>(rows.integer(16), path, field("red")));
+      state.confirmed_min_observations = storedAs<int>(rows.integer(19), path, field("confirmed_min_observations"));
       point->restoreState(state);
     }
   }
@@ -639,7 +748,10 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
       KeyFrame* keyframe = keyframeAt(rows.integer(0), "the covisibility table");
       KeyFrame* other = keyframeAt(rows.integer(1), "the covisibility table");
       if (keyframe == other) refuse("keyframe " + std::to_string(keyframe->id()) + " is covisible with itself");
-      keyframe->addConnection(other, static_cast<int>(rows.integer(2)));
+      keyframe->addConnection(other, storedAs<int>(rows.integer(2), path, [&] {
+                                return "the covisibility weight of keyframe " + std::to_string(keyframe->id()) +
+                                       " with keyframe " + std::to_string(other->id());
+                              }));
     }
     SqliteStatement loops = db.prepare("SELECT keyframe_id, other_id FROM loop_edges");
     while (loops.step()) keyframeAt(loops.integer(0), "the loop_edges table")->addLoopEdge(keyframeAt(loops.integer(1), "the loop_edges table"));
@@ -659,17 +771,30 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
     SqliteStatement members = db.prepare("SELECT map_point_id, rejected FROM object_points WHERE object_id = ? ORDER BY map_point_id");
     SqliteStatement seen_by = db.prepare("SELECT keyframe_id FROM object_keyframes WHERE object_id = ? ORDER BY keyframe_id");
     SqliteStatement merged = db.prepare("SELECT class_name FROM object_merged_classes WHERE object_id = ? ORDER BY class_name");
+    // Objects are grouped from every live point, but the writer saves only the
+    // points a live keyframe sees (each keypoint held by one): a row may name a
+    // point the file does not hold. It is left out, not refused.
+    long missing = 0;
+    std::string first_missing;
     while (rows.step()) {
       ObjectLandmark object;
       const long long id = rows.integer(0);
-      object.class_id = static_cast<int>(rows.integer(1));
+      object.class_id =
+          storedAs<int>(rows.integer(1), path, [&] { return "object " + std::to_string(id) + "'s class_id"; });
       object.class_name = rows.text(2);
       object.confidence = rows.real(3);
       int column = 4;
       for (Vec3* v : {&object.centroid, &object.box_min, &object.box_max})
         for (int k = 0; k < 3; ++k) (*v)(k) = rows.real(column++);
       members.bind(1, id);
-      while (members.step()) (members.integer(1) ? object.rejected_point_ids : object.point_ids).push_back(static_cast<long>(members.integer(0)));
+      while (members.step()) {
+        const long point = static_cast<long>(members.integer(0));
+        if (point_by_id.count(point) == 0) {
+          if (missing++ == 0) first_missing = "object " + std::to_string(id) + ", point " + std::to_string(point);
+          continue;
+        }
+        (members.integer(1) ? object.rejected_point_ids : object.point_ids).push_back(point);
+      }
       members.reset();
       seen_by.bind(1, id);
       while (seen_by.step()) object.keyframe_ids.push_back(static_cast<long>(seen_by.integer(0)));
@@ -679,6 +804,9 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
       merged.reset();
       objects->push_back(std::move(object));
     }
+    if (missing > 0)
+      spdlog::warn("{}: {} object_points rows name map points the map does not hold (the first: {}); they are left out",
+                   path, missing, first_missing);
   }
 }
 

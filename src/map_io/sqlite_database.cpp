@@ -116,6 +116,12 @@ SqliteDatabase::SqliteDatabase(const std::string& path, Access access) : path_(p
   // SQLite would build each such value, up to 1 GB, and we would copy it. A map's
   // longest value is a file path; a larger one is SQLite's "string or blob too big".
   if (access == Access::ReadOnly) sqlite3_limit(database_, SQLITE_LIMIT_LENGTH, kMaxReadValueBytes);
+#ifdef SQLITE_DBCONFIG_TRUSTED_SCHEMA
+  // A file's schema is not ours to trust: functions it names run only when
+  // SQLite deems them harmless. An older library refuses the option; then the
+  // map loader's own schema check is what stands.
+  if (access == Access::ReadOnly) sqlite3_db_config(database_, SQLITE_DBCONFIG_TRUSTED_SCHEMA, 0, nullptr);
+#endif
 }
 
 SqliteDatabase::~SqliteDatabase() { sqlite3_close(database_); }

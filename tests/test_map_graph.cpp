@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "synthetic_views.hpp"
 #include "vslam/map/map.hpp"
 #include "vslam/place/keyframe_database.hpp"
 #include "vslam/slam/local_mapping.hpp"
@@ -16,21 +17,6 @@ namespace {
 
 class MapGraphTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    camera_.width = 640;
-    camera_.height = 480;
-    camera_.fx = camera_.fy = 500;
-    camera_.cx = 320;
-    camera_.cy = 240;
-    pyramid_.levels = 8;
-    pyramid_.scale_factor = 1.2;
-    double s = 1;
-    for (int l = 0; l < 8; ++l, s *= 1.2) {
-      pyramid_.scale.push_back(s);
-      pyramid_.sigma2.push_back(s * s);
-      pyramid_.inv_sigma2.push_back(1 / (s * s));
-    }
-  }
 
   // A frame with `n` keypoints whose descriptors are all-zero except byte 0 = i.
   Frame makeFrame(long id, int n, double x_offset = 0) {
@@ -63,8 +49,8 @@ class MapGraphTest : public ::testing::Test {
     return point;
   }
 
-  PinholeCamera camera_;
-  ScalePyramid pyramid_;
+  PinholeCamera camera_ = test::vgaCamera();
+  ScalePyramid pyramid_ = test::scalePyramid();
   Map map_;
 };
 

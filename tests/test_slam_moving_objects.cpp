@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "synthetic_views.hpp"
 #include "vslam/map/map_point.hpp"
 #include "vslam/slam/moving_objects.hpp"
 
@@ -17,16 +18,7 @@ constexpr int kPerson = 0, kCar = 2, kChair = 56;
 class MovingObjectsTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    camera_.width = 640;
-    camera_.height = 480;
-    camera_.fx = camera_.fy = 500;
-    camera_.cx = 320;
-    camera_.cy = 240;
     camera_.bf = 40;
-    pyramid_.levels = 1;
-    pyramid_.scale = {1.0};
-    pyramid_.sigma2 = {1.0};
-    pyramid_.inv_sigma2 = {1.0};
     frame_.camera = &camera_;
     frame_.pyramid = &pyramid_;
     // The camera at the origin looking along +z, moved 10 cm to the right.
@@ -60,8 +52,8 @@ class MovingObjectsTest : public ::testing::Test {
     return detection;
   }
 
-  PinholeCamera camera_;
-  ScalePyramid pyramid_;
+  PinholeCamera camera_ = test::vgaCamera();
+  ScalePyramid pyramid_ = test::scalePyramid(1);
   Frame frame_;
   std::vector<std::unique_ptr<MapPoint>> points_;
 };

@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
+#include "synthetic_views.hpp"
 #include "vslam/map/map.hpp"
 #include "vslam/slam/map_matching.hpp"
 
@@ -48,21 +49,6 @@ struct FeatureList {
 
 class Sim3SearchTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    camera_.width = 640;
-    camera_.height = 480;
-    camera_.fx = camera_.fy = 500;
-    camera_.cx = 320;
-    camera_.cy = 240;
-    pyramid_.levels = 8;
-    pyramid_.scale_factor = 1.2;
-    double s = 1;
-    for (int l = 0; l < 8; ++l, s *= 1.2) {
-      pyramid_.scale.push_back(s);
-      pyramid_.sigma2.push_back(s * s);
-      pyramid_.inv_sigma2.push_back(1 / (s * s));
-    }
-  }
 
   KeyFrame* makeKeyFrame(long id, const FeatureList& features, const SE3& T_cw) {
     Frame frame;
@@ -103,8 +89,8 @@ class Sim3SearchTest : public ::testing::Test {
     return Vec3((px.x() - camera_.cx) / camera_.fx * depth, (px.y() - camera_.cy) / camera_.fy * depth, depth);
   }
 
-  PinholeCamera camera_;
-  ScalePyramid pyramid_;
+  PinholeCamera camera_ = test::vgaCamera();
+  ScalePyramid pyramid_ = test::scalePyramid();
   Map map_;
 };
 

@@ -17,7 +17,6 @@ namespace {
 
 class MapGraphTest : public ::testing::Test {
  protected:
-
   // A frame with `n` keypoints whose descriptors are all-zero except byte 0 = i.
   Frame makeFrame(long id, int n, double x_offset = 0) {
     Frame frame;

@@ -49,7 +49,6 @@ struct FeatureList {
 
 class Sim3SearchTest : public ::testing::Test {
  protected:
-
   KeyFrame* makeKeyFrame(long id, const FeatureList& features, const SE3& T_cw) {
     Frame frame;
     frame.id = id;

@@ -134,6 +134,8 @@ Config loadVslamYaml(const std::string& text, const std::string& path) {
   reader.optional(init, "initializer", "min_matches", config.initializer.min_matches);
   reader.optional(init, "initializer", "min_parallax_deg", config.initializer.min_parallax_deg);
   reader.optional(init, "initializer", "min_triangulated", config.initializer.min_triangulated);
+  reader.optional(init, "initializer", "max_translation_direction_std_deg",
+                  config.initializer.max_translation_direction_std_deg);
 
   const YAML::Node trk = reader.section("tracking");
   reader.optional(trk, "tracking", "max_frames_between_keyframes", config.tracking.max_frames_between_keyframes);

@@ -8,6 +8,7 @@
 #include <random>
 #include <sstream>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
@@ -269,6 +270,40 @@ SE3 refineMotion(const SE3& initial, const Mat3& K, const Matches& m, const std:
   return SE3(R_refined, t_refined.normalized());
 }
 
+// First-order standard deviation (degrees) of the translation direction of
+// `motion`: the largest axis of its covariance from the Sampson residuals of
+// the used matches (each scaled by its sigma), with the rotation
+// marginalised. +inf when the direction is not constrained at all.
+double translationDirectionStdDeg(const SE3& motion, const Mat3& K, const Matches& m, const std::vector<bool>& use) {
+  double angle_axis[3];
+  double translation[3] = {motion.t.x(), motion.t.y(), motion.t.z()};
+  const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> R_row = motion.R;
+  ceres::RotationMatrixToAngleAxis(ceres::RowMajorAdapter3x3(R_row.data()), angle_axis);
+  ceres::Problem problem;
+  const Mat3 K_inv = K.inverse();
+  int n_used = 0;
+  for (size_t i = 0; i < m.size(); ++i) {
+    if (!use[i]) continue;
+    const double inv_sigma = std::sqrt(std::min(m.inv_sigma2_ref[i], m.inv_sigma2_cur[i]));
+    auto* cost = new ceres::AutoDiffCostFunction<SampsonResidual, 1, 3, 3>(
+        new SampsonResidual(K_inv * m.ref[i].homogeneous(), K_inv * m.cur[i].homogeneous(), K, inv_sigma));
+    problem.AddResidualBlock(cost, nullptr, angle_axis, translation);
+    ++n_used;
+  }
+  if (n_used < kMinimalSetSize || motion.t.norm() == 0) return std::numeric_limits<double>::infinity();
+  problem.SetManifold(translation, new ceres::SphereManifold<3>());
+  ceres::Covariance::Options options;
+  options.algorithm_type = ceres::DENSE_SVD;
+  ceres::Covariance covariance(options);
+  const std::vector<std::pair<const double*, const double*>> blocks = {{translation, translation}};
+  if (!covariance.Compute(blocks, &problem)) return std::numeric_limits<double>::infinity();
+  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> cov;
+  covariance.GetCovarianceBlock(translation, translation, cov.data());
+  const Mat3 cov_t = cov;
+  const Eigen::SelfAdjointEigenSolver<Mat3> eigen(cov_t);
+  return toDeg(std::sqrt(std::max(0.0, eigen.eigenvalues().maxCoeff())));
+}
+
 // Triangulation of the inlier matches under one motion hypothesis.
 struct MotionCheck {
   SE3 T_cur_ref;
@@ -501,6 +536,7 @@ TwoViewResult TwoViewInitializer::initialize(const std::vector<Vec2>& pts_ref, c
     if (refined_check.n_good >= best.n_good) best = std::move(refined_check);
   }
   const int second_good = checks.size() > 1 ? checks[1].n_good : 0;
+  result.translation_direction_std_deg = translationDirectionStdDeg(best.T_cur_ref, K_, matches, best.good);
 
   result.T_cur_ref = best.T_cur_ref;
   result.points_ref = best.points;
@@ -537,6 +573,15 @@ TwoViewResult TwoViewInitializer::initialize(const std::vector<Vec2>& pts_ref, c
   if (second_good > params_.max_second_best_ratio * best.n_good) {
     result.failure_reason = "ambiguous motion from " + model_name + " (runner-up triangulates " +
                             std::to_string(second_good) + " of the best's " + std::to_string(best.n_good) + ")";
+    return result;
+  }
+  // A short baseline under rotation leaves F's translation direction barely
+  // determined; the best of several nearly equal motions can then be far from
+  // the true one (docs/GEOMETRY.md). Wait for a longer baseline instead.
+  if (!result.used_homography && result.translation_direction_std_deg > params_.max_translation_direction_std_deg) {
+    result.failure_reason = "translation direction from F uncertain (standard deviation " +
+                            formatDeg(result.translation_direction_std_deg) + " deg > " +
+                            formatDeg(params_.max_translation_direction_std_deg) + " deg)";
     return result;
   }
   result.success = true;

@@ -255,9 +255,10 @@ void Tracking::initialise(Frame& frame) {
   const TwoViewInitializer initializer(frame.camera->Keigen(), config_.initializer);
   const TwoViewResult result = initializer.initialize(pts_ref, pts_cur);
   spdlog::debug("frame {}: init attempt with frame {}: {} matches, {} model inliers, {} triangulated, ratio {:.2f}, "
-                "parallax {:.2f} deg: {}",
+                "parallax {:.2f} deg, translation direction +-{:.2f} deg: {}",
                 frame.index, reference.index, matched.count, result.n_model_inliers, result.n_triangulated,
-                result.score_ratio, result.median_parallax_deg, result.success ? "ok" : result.failure_reason);
+                result.score_ratio, result.median_parallax_deg, result.translation_direction_std_deg,
+                result.success ? "ok" : result.failure_reason);
   if (!result.success) {
     return;
   }

@@ -30,6 +30,9 @@ struct InitializerParams {
   double min_point_parallax_deg = 0.36;  // a point counts as triangulated above this (cos 0.99998)
   double max_second_best_ratio = 0.7;    // motion is ambiguous if the runner-up has more than this x the best's points
   double min_consistent_fraction = 0.9;  // the motion must explain this share of the model's inliers
+  // Ours: a motion from F is refused while its translation direction is known
+  // no better than this (1 sigma, first order); docs/GEOMETRY.md.
+  double max_translation_direction_std_deg = 5.0;
   bool refine_motion = true;             // Sampson-error refinement of the chosen (R, t)
   bool score_calibrated_f = false;       // true: score each F as its nearest essential matrix (see docs/GEOMETRY.md)
 };

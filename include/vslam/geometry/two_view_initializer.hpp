@@ -25,6 +25,9 @@ struct TwoViewResult {
   int n_model_inliers = 0;
   int n_triangulated = 0;
   double median_parallax_deg = 0;  // over the triangulated points of the chosen motion
+  // First-order standard deviation of the chosen motion's translation
+  // direction, rotation marginalised (+inf when unconstrained).
+  double translation_direction_std_deg = 0;
   std::string failure_reason;      // why it failed (for the log); empty on success
   // On failure the other fields still describe the best attempt, for logging;
   // nothing in them may be used to build a map.

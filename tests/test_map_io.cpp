@@ -537,10 +537,11 @@ class CapturedLog {
   std::shared_ptr<spdlog::logger> previous_;
 };
 
-// object_points may name a map point the file does not hold, and the writer
-// itself writes such rows: objects are grouped from every live point, but a
-// point that no live keyframe sees, or whose keypoints an earlier point
-// holds, is not saved. The loader leaves those rows out, and says so.
+// object_points may name a map point the file does not hold: maps saved
+// before the writer left such members out have them (objects are grouped from
+// every live point, but a point that no live keyframe sees, or whose keypoints
+// an earlier point holds, is not saved). The loader leaves those rows out, and
+// says so.
 TEST_F(MapIoTest, LeavesOutObjectPointsThatAreNotInTheMap) {
   const std::string path = save("map.sqlite");
   edit(path, "INSERT INTO object_points VALUES(0, 777, 0); INSERT INTO object_points VALUES(0, 778, 1)");
@@ -559,6 +560,29 @@ TEST_F(MapIoTest, LeavesOutObjectPointsThatAreNotInTheMap) {
                             "point 777); they are left out"),
             std::string::npos)
       << log;
+}
+
+// Objects are grouped from every live point (and a point culled after the
+// grouping is still named), while the writer saves only the points a live
+// keyframe sees: the file must still name no point or keyframe it does not hold.
+TEST_F(MapIoTest, WritesNoObjectMemberTheFileDoesNotHold) {
+  KeyFrame* culled = map_.keyFrameById(3);
+  ASSERT_TRUE(culled->isBad());
+  MapPoint* unseen = map_.createMapPoint(Vec3(0.5, 0.5, 2.0), culled);  // live, but seen only by the culled keyframe
+  unseen->addObservation(culled, 119);
+  objects_[0].point_ids = {0, 5, 10, unseen->id(), 777};
+  objects_[0].rejected_point_ids = {15, 778};
+  objects_[0].keyframe_ids = {0, 1, 2, culled->id(), 99};
+  const std::string path = save("map.sqlite");
+  SqliteDatabase db(path, SqliteDatabase::Access::ReadOnly);
+  EXPECT_EQ(db.queryInteger("SELECT COUNT(*) FROM object_points WHERE map_point_id NOT IN (SELECT id FROM map_points)"),
+            0);
+  EXPECT_EQ(db.queryInteger("SELECT COUNT(*) FROM object_keyframes WHERE keyframe_id NOT IN (SELECT id FROM keyframes)"),
+            0);
+  // The members the file holds are all there.
+  EXPECT_EQ(db.queryInteger("SELECT COUNT(*) FROM object_points WHERE rejected = 0"), 3);
+  EXPECT_EQ(db.queryInteger("SELECT COUNT(*) FROM object_points WHERE rejected = 1"), 1);
+  EXPECT_EQ(db.queryInteger("SELECT COUNT(*) FROM object_keyframes"), 3);
 }
 
 // A map's schema is data too: a crafted file could compute a column (SQLite

@@ -209,13 +209,15 @@ void writeKeyFrames(SqliteDatabase& db, const std::vector<KeyFrame*>& keyframes)
   }
 }
 
-void writeMapPoints(SqliteDatabase& db, const std::vector<MapPoint*>& points) {
+// Returns the ids of the points written: a point no live keyframe sees is not.
+std::set<long> writeMapPoints(SqliteDatabase& db, const std::vector<MapPoint*>& points) {
   SqliteStatement row =
       db.prepare("INSERT INTO map_points VALUES(?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   SqliteStatement observation = db.prepare("INSERT INTO observations VALUES(?, ?, ?)");
   // A keypoint holds one point: the loader refuses a file where two claim it,
   // so the writer never writes one (the first point, by id, keeps it).
   std::set<std::pair<long, int>> claimed;
+  std::set<long> written;
   for (const MapPoint* point : points) {
     std::vector<std::pair<KeyFrame*, int>> observed;
     for (const auto& [keyframe, index] : point->observations())
@@ -243,17 +245,25 @@ void writeMapPoints(SqliteDatabase& db, const std::vector<MapPoint*>& points) {
     row.run();
     for (const auto& [keyframe, index] : observed)
       observation.bind(1, id).bind(2, static_cast<long long>(keyframe->id())).bind(3, static_cast<long long>(index)).run();
+    written.insert(point->id());
   }
+  return written;
 }
 
+// Objects name their points and keyframes by id; only those in `point_ids` and
+// `keyframe_ids` (the ones the file holds) are written. The others are points
+// culled since the objects were grouped, or ones the file leaves out: no longer
+// members, and the loader would have to drop them.
 void writeObjects(SqliteDatabase& db, const std::vector<ObjectLandmark>& objects,
-                  const std::vector<std::string>& class_names) {
+                  const std::vector<std::string>& class_names, const std::set<long>& point_ids,
+                  const std::set<long>& keyframe_ids) {
   SqliteStatement name = db.prepare("INSERT INTO classes VALUES(?, ?)");
   for (size_t i = 0; i < class_names.size(); ++i) name.bind(1, static_cast<long long>(i)).bind(2, class_names[i]).run();
   SqliteStatement row = db.prepare("INSERT INTO objects VALUES(?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   SqliteStatement member = db.prepare("INSERT INTO object_points VALUES(?, ?, ?)");
   SqliteStatement seen_by = db.prepare("INSERT INTO object_keyframes VALUES(?, ?)");
   SqliteStatement merged = db.prepare("INSERT INTO object_merged_classes VALUES(?, ?)");
+  long points_left_out = 0, keyframes_left_out = 0;
   for (size_t o = 0; o < objects.size(); ++o) {
     const ObjectLandmark& object = objects[o];
     const long long id = static_cast<long long>(o);
@@ -262,12 +272,29 @@ void writeObjects(SqliteDatabase& db, const std::vector<ObjectLandmark>& objects
     for (const Vec3* v : {&object.centroid, &object.box_min, &object.box_max})
       for (int k = 0; k < 3; ++k) row.bind(column++, (*v)(k));
     row.run();
-    for (long point : object.point_ids) member.bind(1, id).bind(2, static_cast<long long>(point)).bind(3, 0LL).run();
-    for (long point : object.rejected_point_ids)
-      member.bind(1, id).bind(2, static_cast<long long>(point)).bind(3, 1LL).run();
-    for (long keyframe : object.keyframe_ids) seen_by.bind(1, id).bind(2, static_cast<long long>(keyframe)).run();
+    auto writeMembers = [&](const std::vector<long>& members, long long rejected) {
+      for (long point : members) {
+        if (point_ids.count(point) == 0) {
+          ++points_left_out;
+          continue;
+        }
+        member.bind(1, id).bind(2, static_cast<long long>(point)).bind(3, rejected).run();
+      }
+    };
+    writeMembers(object.point_ids, 0);
+    writeMembers(object.rejected_point_ids, 1);
+    for (long keyframe : object.keyframe_ids) {
+      if (keyframe_ids.count(keyframe) == 0) {
+        ++keyframes_left_out;
+        continue;
+      }
+      seen_by.bind(1, id).bind(2, static_cast<long long>(keyframe)).run();
+    }
     for (const std::string& class_name : object.merged_classes) merged.bind(1, id).bind(2, class_name).run();
   }
+  if (points_left_out > 0 || keyframes_left_out > 0)
+    spdlog::debug("map save: {} object points and {} object keyframes not in the saved map are left out",
+                  points_left_out, keyframes_left_out);
 }
 
 // Opens a map read-only after SQLite's own check of every page and index.
@@ -499,9 +526,12 @@ void saveMapDatabase(const std::string& path, const Map& map, const MapFileHeade
       db.execute("PRAGMA journal_mode = OFF");
       db.execute("BEGIN");
       writeSchemaAndHeader(db, header);
-      writeKeyFrames(db, map.keyframes());
-      writeMapPoints(db, map.mapPoints());
-      writeObjects(db, objects, class_names);
+      const std::vector<KeyFrame*> keyframes = map.keyframes();
+      writeKeyFrames(db, keyframes);
+      const std::set<long> point_ids = writeMapPoints(db, map.mapPoints());
+      std::set<long> keyframe_ids;
+      for (const KeyFrame* keyframe : keyframes) keyframe_ids.insert(keyframe->id());
+      writeObjects(db, objects, class_names, point_ids, keyframe_ids);
       db.execute("COMMIT");
     } catch (const InputError& e) {
       // The error names the temporary file; the user knows the final one.

@@ -49,7 +49,9 @@ const char* toString(SensorMode mode);
 
 // Writes the live keyframes and map points of `map` with their graph, the
 // object landmarks and the detector's class names to `path` (caller holds the
-// map lock). Throws InputError naming `path` when it cannot be written; the
+// map lock). An object's points and keyframes that the file does not hold (a
+// point no live keyframe sees, one culled since the objects were grouped) are
+// left out. Throws InputError naming `path` when it cannot be written; the
 // file is then left as it was.
 void saveMapDatabase(const std::string& path, const Map& map, const MapFileHeader& header,
                      const std::vector<ObjectLandmark>& objects, const std::vector<std::string>& class_names);

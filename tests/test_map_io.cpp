@@ -562,6 +562,27 @@ TEST_F(MapIoTest, LeavesOutObjectPointsThatAreNotInTheMap) {
       << log;
 }
 
+// Likewise object_keyframes may name a keyframe the file does not hold (a
+// crafted or damaged file: the writer writes none): left out, and said so.
+TEST_F(MapIoTest, LeavesOutObjectKeyFramesThatAreNotInTheMap) {
+  const std::string path = save("map.sqlite");
+  edit(path, "INSERT INTO object_keyframes VALUES(0, 3); INSERT INTO object_keyframes VALUES(0, 777)");
+  Map loaded;
+  std::vector<ObjectLandmark> objects;
+  std::string log;
+  {
+    const CapturedLog captured;
+    loadMapDatabase(path, loaded, camera_, pyramid_, &objects);
+    log = captured.text();
+  }
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].keyframe_ids, (std::vector<long>{0, 1, 2}));
+  EXPECT_NE(log.find(path + ": 2 object_keyframes rows name keyframes the map does not hold (the first: object 0, "
+                            "keyframe 3); they are left out"),
+            std::string::npos)
+      << log;
+}
+
 // Objects are grouped from every live point (and a point culled after the
 // grouping is still named), while the writer saves only the points a live
 // keyframe sees: the file must still name no point or keyframe it does not hold.

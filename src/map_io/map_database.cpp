@@ -801,11 +801,11 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
     SqliteStatement members = db.prepare("SELECT map_point_id, rejected FROM object_points WHERE object_id = ? ORDER BY map_point_id");
     SqliteStatement seen_by = db.prepare("SELECT keyframe_id FROM object_keyframes WHERE object_id = ? ORDER BY keyframe_id");
     SqliteStatement merged = db.prepare("SELECT class_name FROM object_merged_classes WHERE object_id = ? ORDER BY class_name");
-    // Objects are grouped from every live point, but the writer saves only the
-    // points a live keyframe sees (each keypoint held by one): a row may name a
-    // point the file does not hold. It is left out, not refused.
-    long missing = 0;
-    std::string first_missing;
+    // A map saved before the writer left out the members it does not save (or
+    // a crafted one) may name points or keyframes the file does not hold:
+    // those rows are left out, not refused.
+    long missing = 0, missing_keyframes = 0;
+    std::string first_missing, first_missing_keyframe;
     while (rows.step()) {
       ObjectLandmark object;
       const long long id = rows.integer(0);
@@ -827,7 +827,15 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
       }
       members.reset();
       seen_by.bind(1, id);
-      while (seen_by.step()) object.keyframe_ids.push_back(static_cast<long>(seen_by.integer(0)));
+      while (seen_by.step()) {
+        const long long keyframe = seen_by.integer(0);
+        if (!map.keyFrameById(static_cast<long>(keyframe))) {
+          if (missing_keyframes++ == 0)
+            first_missing_keyframe = "object " + std::to_string(id) + ", keyframe " + std::to_string(keyframe);
+          continue;
+        }
+        object.keyframe_ids.push_back(static_cast<long>(keyframe));
+      }
       seen_by.reset();
       merged.bind(1, id);
       while (merged.step()) object.merged_classes.push_back(merged.text(0));
@@ -837,6 +845,9 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
     if (missing > 0)
       spdlog::warn("{}: {} object_points rows name map points the map does not hold (the first: {}); they are left out",
                    path, missing, first_missing);
+    if (missing_keyframes > 0)
+      spdlog::warn("{}: {} object_keyframes rows name keyframes the map does not hold (the first: {}); they are "
+                   "left out", path, missing_keyframes, first_missing_keyframe);
   }
 }
 

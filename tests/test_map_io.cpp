@@ -292,6 +292,32 @@ TEST(MapIoChecksum, VocabularyChecksumIsOfTheFileBytes) {
   EXPECT_THROW(vocabularyChecksum((dir / "missing").string()), InputError);
 }
 
+// The one place a run's mode, camera, pyramid and vocabulary become what it
+// saves in a map and needs of a map it loads.
+TEST(MapIoIdentity, IsTheRunsModeCameraPyramidAndVocabulary) {
+  const fs::path dir = test::scratchDir("map_io_identity");
+  const std::string vocabulary = (dir / "vocabulary.bin").string();
+  std::ofstream(vocabulary, std::ios::binary) << "a";
+  Config config;
+  config.sensor = SensorMode::RgbD;
+  config.camera.name = "synthetic";
+  config.camera.fx = 517.3;
+  config.camera.bf = 40.0;
+  config.orb.n_levels = 6;
+  config.orb.scale_factor = 1.3;
+  const MapIdentity identity = mapIdentityOf(config, vocabulary);
+  EXPECT_EQ(identity.mode, SensorMode::RgbD);
+  EXPECT_EQ(identity.camera.name, "synthetic");
+  EXPECT_EQ(identity.camera.fx, 517.3);
+  EXPECT_EQ(identity.camera.bf, 40.0);
+  EXPECT_EQ(identity.orb_levels, 6);
+  EXPECT_EQ(identity.orb_scale_factor, 1.3);
+  EXPECT_EQ(identity.vocabulary_checksum, "af63dc4c8601ec8c");
+  EXPECT_EQ(mapIdentityOf(config, "").vocabulary_checksum, "none");
+  // A header made from it is what the same run accepts.
+  EXPECT_NO_THROW(checkMapCompatible("map.sqlite", MapFileHeader(identity), identity));
+}
+
 // ---- refusals: each names the file and says why, in one line ----
 
 TEST_F(MapIoTest, RefusesAMissingFile) {
@@ -346,12 +372,12 @@ TEST_F(MapIoTest, RefusesAnSqliteFileThatIsNotAMap) {
 TEST_F(MapIoTest, RefusesAnotherCameraModeOrVocabulary) {
   const std::string path = save("map.sqlite");
   const MapFileHeader header = readMapHeader(path);
-  MapRequirements required;
+  MapIdentity required;
   required.mode = SensorMode::RgbD;
   required.camera = camera_;
   required.vocabulary_checksum = "0123456789abcdef";
   EXPECT_NO_THROW(checkMapCompatible(path, header, required));
-  auto message = [&](const MapRequirements& changed) {
+  auto message = [&](const MapIdentity& changed) {
     try {
       checkMapCompatible(path, header, changed);
     } catch (const InputError& e) {
@@ -359,18 +385,18 @@ TEST_F(MapIoTest, RefusesAnotherCameraModeOrVocabulary) {
     }
     return std::string();
   };
-  MapRequirements camera = required;
+  MapIdentity camera = required;
   camera.camera.fx += 1.0;
   EXPECT_EQ(message(camera).rfind(path + ": the map was made with another camera (synthetic 640x480 fx 517.3 ", 0), 0u)
       << message(camera);
-  MapRequirements mode = required;
+  MapIdentity mode = required;
   mode.mode = SensorMode::Monocular;
   EXPECT_EQ(message(mode), path + ": the map was made in rgbd mode, this run is mono");
-  MapRequirements vocabulary = required;
+  MapIdentity vocabulary = required;
   vocabulary.vocabulary_checksum = "fedcba9876543210";
   EXPECT_EQ(message(vocabulary), path + ": the map was made with another vocabulary (checksum 0123456789abcdef from "
                                         "vocab/test.bin; this run's is fedcba9876543210)");
-  MapRequirements pyramid = required;
+  MapIdentity pyramid = required;
   pyramid.orb_levels = 4;
   EXPECT_EQ(message(pyramid).rfind(path + ": the map was made with another ORB pyramid (8 levels", 0), 0u)
       << message(pyramid);

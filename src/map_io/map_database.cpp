@@ -563,7 +563,17 @@ MapFileCounts readMapCounts(const std::string& path) {
   return counts;
 }
 
-void checkMapCompatible(const std::string& path, const MapFileHeader& header, const MapRequirements& required) {
+MapIdentity mapIdentityOf(const Config& config, const std::string& vocabulary_path) {
+  MapIdentity identity;
+  identity.mode = config.sensor;
+  identity.camera = config.camera;
+  identity.orb_levels = config.orb.n_levels;
+  identity.orb_scale_factor = config.orb.scale_factor;
+  identity.vocabulary_checksum = vocabularyChecksum(vocabulary_path);
+  return identity;
+}
+
+void checkMapCompatible(const std::string& path, const MapFileHeader& header, const MapIdentity& required) {
   if (header.mode != required.mode)
     throw InputError(path, 0,
                      std::string("the map was made in ") + toString(header.mode) + " mode, this run is " +

@@ -319,13 +319,9 @@ std::vector<ObjectLandmark> System::objectMap(const ObjectMapParams& params) con
 }
 
 void System::saveMap(const std::string& path, const std::string& sequence) const {
-  MapFileHeader header;
-  header.mode = config_.sensor;
-  header.camera = config_.camera;
-  header.orb_levels = config_.orb.n_levels;
-  header.orb_scale_factor = config_.orb.scale_factor;
-  // Computed when first needed: a run that saves no map does not read the vocabulary twice.
-  header.vocabulary_checksum = vocabularyChecksum(vocabulary_path_);
+  // The vocabulary's checksum is computed when first needed: a run that saves
+  // no map does not read the vocabulary twice.
+  MapFileHeader header(mapIdentityOf(config_, vocabulary_path_));
   header.vocabulary_file = vocabulary_path_.empty() ? "none" : vocabulary_path_;
   header.sequence = sequence;
   const std::vector<std::string> class_names = detection_ ? detection_->classNames() : std::vector<std::string>();
@@ -340,13 +336,7 @@ void System::saveMap(const std::string& path, const std::string& sequence) const
 std::pair<int, int> System::loadMap(const std::string& path, bool localize) {
   if (next_frame_id_ > 0) throw std::logic_error("System::loadMap: only before the first frame");
   const MapFileHeader header = readMapHeader(path);
-  MapRequirements required;
-  required.mode = config_.sensor;
-  required.camera = config_.camera;
-  required.orb_levels = config_.orb.n_levels;
-  required.orb_scale_factor = config_.orb.scale_factor;
-  required.vocabulary_checksum = vocabularyChecksum(vocabulary_path_);
-  checkMapCompatible(path, header, required);
+  checkMapCompatible(path, header, mapIdentityOf(config_, vocabulary_path_));
   std::pair<int, int> loaded;
   {
     std::lock_guard<std::mutex> lock(map_->mutex());

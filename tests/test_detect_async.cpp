@@ -12,6 +12,7 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "detect_test_support.hpp"
 #include "test_support.hpp"
 #include "vslam/core/error.hpp"
 #include "vslam/detect/async_detector.hpp"
@@ -135,7 +136,7 @@ TEST(DetectionStage, ResolvesDynamicClassesAndDetectsAhead) {
   ASSERT_NE(stage, nullptr);
   EXPECT_EQ(stage->dynamicClassIds(), (std::vector<int>{0, 56}));
   EXPECT_EQ(stage->classNames().size(), 80u);
-  const cv::Mat dog = cv::imread((test::sharedData() / "images/dog.jpg").string());
+  const cv::Mat dog = test::dogImage();
   // Every frame (the default): both submitted ahead, each frame gets its own three boxes, fresh.
   stage->submitAhead(0, dog);
   stage->submitAhead(1, dog);

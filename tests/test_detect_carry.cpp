@@ -7,9 +7,8 @@
 #include <tuple>
 
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 
-#include "test_support.hpp"
+#include "detect_test_support.hpp"
 #include "vslam/core/config.hpp"
 #include "vslam/detect/box_carrier.hpp"
 #include "vslam/detect/keypoint_filter.hpp"
@@ -163,27 +162,21 @@ TEST(BoxCarrier, ABoxWithoutMatchesIsDroppedNotLeftBehind) {
 // every one is a corner the frame's FAST found, and its descriptor is what
 // ORB computes for it.
 TEST(ReuseFilter, AddsOnlyCornersTheFrameDroppedWithTheirOwnDescriptors) {
-  const cv::Mat image = cv::imread((test::sharedData() / "images/dog.jpg").string(), cv::IMREAD_GRAYSCALE);
-  ASSERT_FALSE(image.empty());
-  const OrbExtractor extractor(OrbParams{});
-  const ImagePyramid pyramid = extractor.buildPyramid(image);
-  std::vector<cv::KeyPoint> frame_keypoints;
-  cv::Mat frame_descriptors;
-  OrbCorners corners;
-  extractor.extract(pyramid, frame_keypoints, frame_descriptors, cv::Rect(), -1, &corners);
+  test::DogFrame frame = test::dogFrame();
+  ASSERT_FALSE(frame.image.empty());
   // Keeping the corners changes nothing about the frame's own extraction.
   std::vector<cv::KeyPoint> plain_keypoints;
   cv::Mat plain_descriptors;
-  extractor.extract(pyramid, plain_keypoints, plain_descriptors);
-  ASSERT_EQ(plain_keypoints.size(), frame_keypoints.size());
-  EXPECT_EQ(cv::norm(plain_descriptors, frame_descriptors, cv::NORM_L1), 0.0);
+  frame.extractor.extract(frame.pyramid, plain_keypoints, plain_descriptors);
+  ASSERT_EQ(plain_keypoints.size(), frame.keypoints.size());
+  EXPECT_EQ(cv::norm(plain_descriptors, frame.descriptors, cv::NORM_L1), 0.0);
 
   using Key = std::tuple<float, float, int>;
   std::set<Key> frame_set, dropped_corners;
-  for (const cv::KeyPoint& kp : frame_keypoints) frame_set.insert({kp.pt.x, kp.pt.y, kp.octave});
+  for (const cv::KeyPoint& kp : frame.keypoints) frame_set.insert({kp.pt.x, kp.pt.y, kp.octave});
   int in_frame = 0;
-  for (int l = 0; l < static_cast<int>(corners.levels.size()); ++l)
-    for (const OrbCorner& corner : corners.levels[l]) {
+  for (int l = 0; l < static_cast<int>(frame.corners.levels.size()); ++l)
+    for (const OrbCorner& corner : frame.corners.levels[l]) {
       if (corner.in_frame) {
         ++in_frame;
         EXPECT_TRUE(frame_set.count({corner.level0.x, corner.level0.y, l}));
@@ -191,14 +184,14 @@ TEST(ReuseFilter, AddsOnlyCornersTheFrameDroppedWithTheirOwnDescriptors) {
         dropped_corners.insert({corner.level0.x, corner.level0.y, l});
       }
     }
-  EXPECT_EQ(in_frame, static_cast<int>(frame_keypoints.size()));
+  EXPECT_EQ(in_frame, static_cast<int>(frame.keypoints.size()));
 
   const cv::Rect box(120, 200, 300, 220);
   std::vector<cv::KeyPoint> added;
   cv::Mat added_descriptors;
   int reused = 0;
-  const OrbCorners frame_corners = corners;  // the frame's as extracted, for the filter below
-  extractor.extractFromCorners(pyramid, corners, box, 250, added, added_descriptors, &reused);
+  const OrbCorners frame_corners = frame.corners;  // the frame's as extracted, for the filter below
+  frame.extractor.extractFromCorners(frame.pyramid, frame.corners, box, 250, added, added_descriptors, &reused);
   ASSERT_FALSE(added.empty());
   EXPECT_EQ(added_descriptors.rows, static_cast<int>(added.size()));
   EXPECT_GT(reused, 0);
@@ -206,7 +199,7 @@ TEST(ReuseFilter, AddsOnlyCornersTheFrameDroppedWithTheirOwnDescriptors) {
   // The paper's filter on the same box, for the descriptors of common keypoints.
   std::vector<cv::KeyPoint> paper;
   cv::Mat paper_descriptors;
-  extractor.extract(pyramid, paper, paper_descriptors, box, 250);
+  frame.extractor.extract(frame.pyramid, paper, paper_descriptors, box, 250);
   std::map<Key, int> paper_rows;
   for (int i = 0; i < static_cast<int>(paper.size()); ++i) paper_rows[{paper[i].pt.x, paper[i].pt.y, paper[i].octave}] = i;
   int compared = 0;
@@ -230,21 +223,22 @@ TEST(ReuseFilter, AddsOnlyCornersTheFrameDroppedWithTheirOwnDescriptors) {
   dog.class_id = 16;
   dog.box = cv::Rect2f(box);
   int filter_reused = 0;
-  std::vector<cv::KeyPoint> keypoints = frame_keypoints;
-  cv::Mat descriptors = frame_descriptors.clone();
+  std::vector<cv::KeyPoint> keypoints = frame.keypoints;
+  cv::Mat descriptors = frame.descriptors.clone();
   OrbCorners filter_corners = frame_corners;
   const KeypointFilterStats stats = applyKeypointFilter(
-      image.size(), {dog}, 64, {}, cornerBoxExtractor(extractor, pyramid, filter_corners, 250, &filter_reused),
-      keypoints, descriptors, labels);
+      frame.image.size(), {dog}, 64, {},
+      cornerBoxExtractor(frame.extractor, frame.pyramid, filter_corners, 250, &filter_reused), keypoints, descriptors,
+      labels);
   EXPECT_EQ(stats.duplicates_dropped, 0);
   EXPECT_EQ(stats.keypoints_added, static_cast<int>(added.size()));
   EXPECT_EQ(filter_reused, reused);
-  EXPECT_EQ(keypoints.size(), frame_keypoints.size() + added.size());
+  EXPECT_EQ(keypoints.size(), frame.keypoints.size() + added.size());
   // The same box again adds nothing: its winners are all the frame's now.
   std::vector<cv::KeyPoint> again;
   cv::Mat again_descriptors;
   int again_reused = 0;
-  extractor.extractFromCorners(pyramid, corners, box, 250, again, again_descriptors, &again_reused);
+  frame.extractor.extractFromCorners(frame.pyramid, frame.corners, box, 250, again, again_descriptors, &again_reused);
   EXPECT_TRUE(again.empty());
   EXPECT_EQ(again_reused, reused + static_cast<int>(added.size()));
 }
@@ -253,14 +247,9 @@ TEST(ReuseFilter, AddsOnlyCornersTheFrameDroppedWithTheirOwnDescriptors) {
 // so the filter drops nothing as a duplicate (it dropped 25 a frame on
 // fr1_xyz before corners were marked as taken between boxes).
 TEST(ReuseFilter, OverlappingBoxesDoNotAddTheSameCornerTwice) {
-  const cv::Mat image = cv::imread((test::sharedData() / "images/dog.jpg").string(), cv::IMREAD_GRAYSCALE);
-  ASSERT_FALSE(image.empty());
-  const OrbExtractor extractor(OrbParams{});
-  const ImagePyramid pyramid = extractor.buildPyramid(image);
-  std::vector<cv::KeyPoint> keypoints;
-  cv::Mat descriptors;
-  OrbCorners corners;
-  extractor.extract(pyramid, keypoints, descriptors, cv::Rect(), -1, &corners);
+  test::DogFrame frame = test::dogFrame();
+  ASSERT_FALSE(frame.image.empty());
+  std::vector<cv::KeyPoint>& keypoints = frame.keypoints;  // the filter adds to the frame's own
   const size_t frame_count = keypoints.size();
   std::vector<Detection> boxes(2);
   boxes[0].id = 0, boxes[0].class_id = 16, boxes[0].box = cv::Rect2f(120, 200, 300, 220);
@@ -268,8 +257,9 @@ TEST(ReuseFilter, OverlappingBoxesDoNotAddTheSameCornerTwice) {
   std::vector<KeypointLabel> labels;
   int reused = 0;
   const KeypointFilterStats stats =
-      applyKeypointFilter(image.size(), boxes, 64, {}, cornerBoxExtractor(extractor, pyramid, corners, 250, &reused),
-                          keypoints, descriptors, labels);
+      applyKeypointFilter(frame.image.size(), boxes, 64, {},
+                          cornerBoxExtractor(frame.extractor, frame.pyramid, frame.corners, 250, &reused), keypoints,
+                          frame.descriptors, labels);
   EXPECT_EQ(stats.boxes_used, 2);
   EXPECT_GT(stats.keypoints_added, 0);
   EXPECT_EQ(stats.duplicates_dropped, 0);

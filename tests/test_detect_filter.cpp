@@ -5,9 +5,9 @@
 #include <functional>
 
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "detect_test_support.hpp"
 #include "test_support.hpp"
 #include "vslam/core/config.hpp"
 #include "vslam/detect/keypoint_filter.hpp"
@@ -227,34 +227,32 @@ TEST(KeypointFilter, MismatchedInputsAreRejected) {
 }
 
 TEST(KeypointFilter, RealOrbExtractorAddsKeypointsInsideTheBox) {
-  const cv::Mat image = cv::imread((test::sharedData() / "images/dog.jpg").string(), cv::IMREAD_GRAYSCALE);
-  ASSERT_FALSE(image.empty());
-  const OrbExtractor extractor(OrbParams{});
-  const ImagePyramid pyramid = extractor.buildPyramid(image);
-  std::vector<cv::KeyPoint> keypoints;
-  cv::Mat descriptors;
-  extractor.extract(pyramid, keypoints, descriptors);
+  test::DogFrame frame = test::dogFrame();
+  ASSERT_FALSE(frame.image.empty());
+  std::vector<cv::KeyPoint>& keypoints = frame.keypoints;  // the filter adds to the frame's own
+  cv::Mat& descriptors = frame.descriptors;
   const size_t frame_count = keypoints.size();
   ASSERT_GT(frame_count, 100u);
   std::vector<KeypointLabel> labels;
 
   const cv::Rect2f bicycle(125.f, 128.f, 442.f, 292.f);
-  const auto stats = applyKeypointFilter(image.size(), {detection(0, 1, bicycle)}, 64, {},
-                                         orbBoxExtractor(extractor, pyramid, 500), keypoints, descriptors, labels);
+  const auto stats = applyKeypointFilter(frame.image.size(), {detection(0, 1, bicycle)}, 64, {},
+                                         orbBoxExtractor(frame.extractor, frame.pyramid, 500), keypoints, descriptors,
+                                         labels);
   EXPECT_EQ(stats.boxes_used, 1);
   EXPECT_GT(stats.keypoints_added, 50);
   EXPECT_EQ(keypoints.size(), frame_count + stats.keypoints_added);
   EXPECT_EQ(descriptors.rows, static_cast<int>(keypoints.size()));
   EXPECT_EQ(descriptors.cols, 32);
   EXPECT_EQ(descriptors.type(), CV_8U);
-  const cv::Rect box = clipToImage(bicycle, image.size());
+  const cv::Rect box = clipToImage(bicycle, frame.image.size());
   for (size_t i = frame_count; i < keypoints.size(); ++i) {
     EXPECT_TRUE(box.contains(cv::Point(static_cast<int>(keypoints[i].pt.x), static_cast<int>(keypoints[i].pt.y))))
         << keypoints[i].pt;
     EXPECT_EQ(labels[i].class_id, 1);
     EXPECT_EQ(labels[i].detection_id, 0);
     EXPECT_GE(keypoints[i].octave, 0);
-    EXPECT_LT(keypoints[i].octave, extractor.levels());
+    EXPECT_LT(keypoints[i].octave, frame.extractor.levels());
   }
   // No exact duplicate survives.
   for (size_t i = frame_count; i < keypoints.size(); ++i)

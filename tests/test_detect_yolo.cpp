@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "detect_test_support.hpp"
 #include "test_support.hpp"
 #include "vslam/core/error.hpp"
 #include "vslam/detect/darknet_weights.hpp"
@@ -42,7 +43,7 @@ std::string describe(const std::vector<Detection>& detections) {
 
 TEST(YoloDetector, DogImageHasDogBicycleAndCarOverTheirObjects) {
   YoloDetector detector(DetectorParams{}, defaultModel());
-  const cv::Mat image = cv::imread((test::sharedData() / "images/dog.jpg").string());
+  const cv::Mat image = test::dogImage();
   ASSERT_FALSE(image.empty());
   const std::vector<Detection> detections = detector.detect(image);
   EXPECT_GT(detector.lastMs(), 0.0);
@@ -69,7 +70,7 @@ TEST(YoloDetector, GreyImagesAreAccepted) {
   // KITTI's image_0 is grey: the detector must take it and still see the
   // objects (without colour the model calls the dog a cat, measured 0.82).
   YoloDetector detector(DetectorParams{}, defaultModel());
-  const cv::Mat grey = cv::imread((test::sharedData() / "images/dog.jpg").string(), cv::IMREAD_GRAYSCALE);
+  const cv::Mat grey = test::dogImage(cv::IMREAD_GRAYSCALE);
   const std::vector<Detection> detections = detector.detect(grey);
   auto found = [&](const std::vector<std::string>& names, const cv::Rect2f& truth) {
     return std::any_of(detections.begin(), detections.end(), [&](const Detection& d) {

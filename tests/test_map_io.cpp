@@ -292,6 +292,32 @@ TEST(MapIoChecksum, VocabularyChecksumIsOfTheFileBytes) {
   EXPECT_THROW(vocabularyChecksum((dir / "missing").string()), InputError);
 }
 
+// The one place a run's mode, camera, pyramid and vocabulary become what it
+// saves in a map and needs of a map it loads.
+TEST(MapIoIdentity, IsTheRunsModeCameraPyramidAndVocabulary) {
+  const fs::path dir = test::scratchDir("map_io_identity");
+  const std::string vocabulary = (dir / "vocabulary.bin").string();
+  std::ofstream(vocabulary, std::ios::binary) << "a";
+  Config config;
+  config.sensor = SensorMode::RgbD;
+  config.camera.name = "synthetic";
+  config.camera.fx = 517.3;
+  config.camera.bf = 40.0;
+  config.orb.n_levels = 6;
+  config.orb.scale_factor = 1.3;
+  const MapIdentity identity = mapIdentityOf(config, vocabulary);
+  EXPECT_EQ(identity.mode, SensorMode::RgbD);
+  EXPECT_EQ(identity.camera.name, "synthetic");
+  EXPECT_EQ(identity.camera.fx, 517.3);
+  EXPECT_EQ(identity.camera.bf, 40.0);
+  EXPECT_EQ(identity.orb_levels, 6);
+  EXPECT_EQ(identity.orb_scale_factor, 1.3);
+  EXPECT_EQ(identity.vocabulary_checksum, "af63dc4c8601ec8c");
+  EXPECT_EQ(mapIdentityOf(config, "").vocabulary_checksum, "none");
+  // A header made from it is what the same run accepts.
+  EXPECT_NO_THROW(checkMapCompatible("map.sqlite", MapFileHeader(identity), identity));
+}
+
 // ---- refusals: each names the file and says why, in one line ----
 
 TEST_F(MapIoTest, RefusesAMissingFile) {
@@ -346,12 +372,12 @@ TEST_F(MapIoTest, RefusesAnSqliteFileThatIsNotAMap) {
 TEST_F(MapIoTest, RefusesAnotherCameraModeOrVocabulary) {
   const std::string path = save("map.sqlite");
   const MapFileHeader header = readMapHeader(path);
-  MapRequirements required;
+  MapIdentity required;
   required.mode = SensorMode::RgbD;
   required.camera = camera_;
   required.vocabulary_checksum = "0123456789abcdef";
   EXPECT_NO_THROW(checkMapCompatible(path, header, required));
-  auto message = [&](const MapRequirements& changed) {
+  auto message = [&](const MapIdentity& changed) {
     try {
       checkMapCompatible(path, header, changed);
     } catch (const InputError& e) {
@@ -359,18 +385,18 @@ TEST_F(MapIoTest, RefusesAnotherCameraModeOrVocabulary) {
     }
     return std::string();
   };
-  MapRequirements camera = required;
+  MapIdentity camera = required;
   camera.camera.fx += 1.0;
   EXPECT_EQ(message(camera).rfind(path + ": the map was made with another camera (synthetic 640x480 fx 517.3 ", 0), 0u)
       << message(camera);
-  MapRequirements mode = required;
+  MapIdentity mode = required;
   mode.mode = SensorMode::Monocular;
   EXPECT_EQ(message(mode), path + ": the map was made in rgbd mode, this run is mono");
-  MapRequirements vocabulary = required;
+  MapIdentity vocabulary = required;
   vocabulary.vocabulary_checksum = "fedcba9876543210";
   EXPECT_EQ(message(vocabulary), path + ": the map was made with another vocabulary (checksum 0123456789abcdef from "
                                         "vocab/test.bin; this run's is fedcba9876543210)");
-  MapRequirements pyramid = required;
+  MapIdentity pyramid = required;
   pyramid.orb_levels = 4;
   EXPECT_EQ(message(pyramid).rfind(path + ": the map was made with another ORB pyramid (8 levels", 0), 0u)
       << message(pyramid);
@@ -537,10 +563,11 @@ class CapturedLog {
   std::shared_ptr<spdlog::logger> previous_;
 };
 
-// object_points may name a map point the file does not hold, and the writer
-// itself writes such rows: objects are grouped from every live point, but a
-// point that no live keyframe sees, or whose keypoints an earlier point
-// holds, is not saved. The loader leaves those rows out, and says so.
+// object_points may name a map point the file does not hold: maps saved
+// before the writer left such members out have them (objects are grouped from
+// every live point, but a point that no live keyframe sees, or whose keypoints
+// an earlier point holds, is not saved). The loader leaves those rows out, and
+// says so.
 TEST_F(MapIoTest, LeavesOutObjectPointsThatAreNotInTheMap) {
   const std::string path = save("map.sqlite");
   edit(path, "INSERT INTO object_points VALUES(0, 777, 0); INSERT INTO object_points VALUES(0, 778, 1)");
@@ -559,6 +586,50 @@ TEST_F(MapIoTest, LeavesOutObjectPointsThatAreNotInTheMap) {
                             "point 777); they are left out"),
             std::string::npos)
       << log;
+}
+
+// Likewise object_keyframes may name a keyframe the file does not hold (a
+// crafted or damaged file: the writer writes none): left out, and said so.
+TEST_F(MapIoTest, LeavesOutObjectKeyFramesThatAreNotInTheMap) {
+  const std::string path = save("map.sqlite");
+  edit(path, "INSERT INTO object_keyframes VALUES(0, 3); INSERT INTO object_keyframes VALUES(0, 777)");
+  Map loaded;
+  std::vector<ObjectLandmark> objects;
+  std::string log;
+  {
+    const CapturedLog captured;
+    loadMapDatabase(path, loaded, camera_, pyramid_, &objects);
+    log = captured.text();
+  }
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].keyframe_ids, (std::vector<long>{0, 1, 2}));
+  EXPECT_NE(log.find(path + ": 2 object_keyframes rows name keyframes the map does not hold (the first: object 0, "
+                            "keyframe 3); they are left out"),
+            std::string::npos)
+      << log;
+}
+
+// Objects are grouped from every live point (and a point culled after the
+// grouping is still named), while the writer saves only the points a live
+// keyframe sees: the file must still name no point or keyframe it does not hold.
+TEST_F(MapIoTest, WritesNoObjectMemberTheFileDoesNotHold) {
+  KeyFrame* culled = map_.keyFrameById(3);
+  ASSERT_TRUE(culled->isBad());
+  MapPoint* unseen = map_.createMapPoint(Vec3(0.5, 0.5, 2.0), culled);  // live, but seen only by the culled keyframe
+  unseen->addObservation(culled, 119);
+  objects_[0].point_ids = {0, 5, 10, unseen->id(), 777};
+  objects_[0].rejected_point_ids = {15, 778};
+  objects_[0].keyframe_ids = {0, 1, 2, culled->id(), 99};
+  const std::string path = save("map.sqlite");
+  SqliteDatabase db(path, SqliteDatabase::Access::ReadOnly);
+  EXPECT_EQ(db.queryInteger("SELECT COUNT(*) FROM object_points WHERE map_point_id NOT IN (SELECT id FROM map_points)"),
+            0);
+  EXPECT_EQ(db.queryInteger("SELECT COUNT(*) FROM object_keyframes WHERE keyframe_id NOT IN (SELECT id FROM keyframes)"),
+            0);
+  // The members the file holds are all there.
+  EXPECT_EQ(db.queryInteger("SELECT COUNT(*) FROM object_points WHERE rejected = 0"), 3);
+  EXPECT_EQ(db.queryInteger("SELECT COUNT(*) FROM object_points WHERE rejected = 1"), 1);
+  EXPECT_EQ(db.queryInteger("SELECT COUNT(*) FROM object_keyframes"), 3);
 }
 
 // A map's schema is data too: a crafted file could compute a column (SQLite

@@ -209,13 +209,15 @@ void writeKeyFrames(SqliteDatabase& db, const std::vector<KeyFrame*>& keyframes)
   }
 }
 
-void writeMapPoints(SqliteDatabase& db, const std::vector<MapPoint*>& points) {
+// Returns the ids of the points written: a point no live keyframe sees is not.
+std::set<long> writeMapPoints(SqliteDatabase& db, const std::vector<MapPoint*>& points) {
   SqliteStatement row =
       db.prepare("INSERT INTO map_points VALUES(?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   SqliteStatement observation = db.prepare("INSERT INTO observations VALUES(?, ?, ?)");
   // A keypoint holds one point: the loader refuses a file where two claim it,
   // so the writer never writes one (the first point, by id, keeps it).
   std::set<std::pair<long, int>> claimed;
+  std::set<long> written;
   for (const MapPoint* point : points) {
     std::vector<std::pair<KeyFrame*, int>> observed;
     for (const auto& [keyframe, index] : point->observations())
@@ -243,17 +245,25 @@ void writeMapPoints(SqliteDatabase& db, const std::vector<MapPoint*>& points) {
     row.run();
     for (const auto& [keyframe, index] : observed)
       observation.bind(1, id).bind(2, static_cast<long long>(keyframe->id())).bind(3, static_cast<long long>(index)).run();
+    written.insert(point->id());
   }
+  return written;
 }
 
+// Objects name their points and keyframes by id; only those in `point_ids` and
+// `keyframe_ids` (the ones the file holds) are written. The others are points
+// culled since the objects were grouped, or ones the file leaves out: no longer
+// members, and the loader would have to drop them.
 void writeObjects(SqliteDatabase& db, const std::vector<ObjectLandmark>& objects,
-                  const std::vector<std::string>& class_names) {
+                  const std::vector<std::string>& class_names, const std::set<long>& point_ids,
+                  const std::set<long>& keyframe_ids) {
   SqliteStatement name = db.prepare("INSERT INTO classes VALUES(?, ?)");
   for (size_t i = 0; i < class_names.size(); ++i) name.bind(1, static_cast<long long>(i)).bind(2, class_names[i]).run();
   SqliteStatement row = db.prepare("INSERT INTO objects VALUES(?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   SqliteStatement member = db.prepare("INSERT INTO object_points VALUES(?, ?, ?)");
   SqliteStatement seen_by = db.prepare("INSERT INTO object_keyframes VALUES(?, ?)");
   SqliteStatement merged = db.prepare("INSERT INTO object_merged_classes VALUES(?, ?)");
+  long points_left_out = 0, keyframes_left_out = 0;
   for (size_t o = 0; o < objects.size(); ++o) {
     const ObjectLandmark& object = objects[o];
     const long long id = static_cast<long long>(o);
@@ -262,12 +272,29 @@ void writeObjects(SqliteDatabase& db, const std::vector<ObjectLandmark>& objects
     for (const Vec3* v : {&object.centroid, &object.box_min, &object.box_max})
       for (int k = 0; k < 3; ++k) row.bind(column++, (*v)(k));
     row.run();
-    for (long point : object.point_ids) member.bind(1, id).bind(2, static_cast<long long>(point)).bind(3, 0LL).run();
-    for (long point : object.rejected_point_ids)
-      member.bind(1, id).bind(2, static_cast<long long>(point)).bind(3, 1LL).run();
-    for (long keyframe : object.keyframe_ids) seen_by.bind(1, id).bind(2, static_cast<long long>(keyframe)).run();
+    auto writeMembers = [&](const std::vector<long>& members, long long rejected) {
+      for (long point : members) {
+        if (point_ids.count(point) == 0) {
+          ++points_left_out;
+          continue;
+        }
+        member.bind(1, id).bind(2, static_cast<long long>(point)).bind(3, rejected).run();
+      }
+    };
+    writeMembers(object.point_ids, 0);
+    writeMembers(object.rejected_point_ids, 1);
+    for (long keyframe : object.keyframe_ids) {
+      if (keyframe_ids.count(keyframe) == 0) {
+        ++keyframes_left_out;
+        continue;
+      }
+      seen_by.bind(1, id).bind(2, static_cast<long long>(keyframe)).run();
+    }
     for (const std::string& class_name : object.merged_classes) merged.bind(1, id).bind(2, class_name).run();
   }
+  if (points_left_out > 0 || keyframes_left_out > 0)
+    spdlog::debug("map save: {} object points and {} object keyframes not in the saved map are left out",
+                  points_left_out, keyframes_left_out);
 }
 
 // Opens a map read-only after SQLite's own check of every page and index.
@@ -499,9 +526,12 @@ void saveMapDatabase(const std::string& path, const Map& map, const MapFileHeade
       db.execute("PRAGMA journal_mode = OFF");
       db.execute("BEGIN");
       writeSchemaAndHeader(db, header);
-      writeKeyFrames(db, map.keyframes());
-      writeMapPoints(db, map.mapPoints());
-      writeObjects(db, objects, class_names);
+      const std::vector<KeyFrame*> keyframes = map.keyframes();
+      writeKeyFrames(db, keyframes);
+      const std::set<long> point_ids = writeMapPoints(db, map.mapPoints());
+      std::set<long> keyframe_ids;
+      for (const KeyFrame* keyframe : keyframes) keyframe_ids.insert(keyframe->id());
+      writeObjects(db, objects, class_names, point_ids, keyframe_ids);
       db.execute("COMMIT");
     } catch (const InputError& e) {
       // The error names the temporary file; the user knows the final one.
@@ -533,7 +563,17 @@ MapFileCounts readMapCounts(const std::string& path) {
   return counts;
 }
 
-void checkMapCompatible(const std::string& path, const MapFileHeader& header, const MapRequirements& required) {
+MapIdentity mapIdentityOf(const Config& config, const std::string& vocabulary_path) {
+  MapIdentity identity;
+  identity.mode = config.sensor;
+  identity.camera = config.camera;
+  identity.orb_levels = config.orb.n_levels;
+  identity.orb_scale_factor = config.orb.scale_factor;
+  identity.vocabulary_checksum = vocabularyChecksum(vocabulary_path);
+  return identity;
+}
+
+void checkMapCompatible(const std::string& path, const MapFileHeader& header, const MapIdentity& required) {
   if (header.mode != required.mode)
     throw InputError(path, 0,
                      std::string("the map was made in ") + toString(header.mode) + " mode, this run is " +
@@ -771,11 +811,11 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
     SqliteStatement members = db.prepare("SELECT map_point_id, rejected FROM object_points WHERE object_id = ? ORDER BY map_point_id");
     SqliteStatement seen_by = db.prepare("SELECT keyframe_id FROM object_keyframes WHERE object_id = ? ORDER BY keyframe_id");
     SqliteStatement merged = db.prepare("SELECT class_name FROM object_merged_classes WHERE object_id = ? ORDER BY class_name");
-    // Objects are grouped from every live point, but the writer saves only the
-    // points a live keyframe sees (each keypoint held by one): a row may name a
-    // point the file does not hold. It is left out, not refused.
-    long missing = 0;
-    std::string first_missing;
+    // A map saved before the writer left out the members it does not save (or
+    // a crafted one) may name points or keyframes the file does not hold:
+    // those rows are left out, not refused.
+    long missing = 0, missing_keyframes = 0;
+    std::string first_missing, first_missing_keyframe;
     while (rows.step()) {
       ObjectLandmark object;
       const long long id = rows.integer(0);
@@ -797,7 +837,15 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
       }
       members.reset();
       seen_by.bind(1, id);
-      while (seen_by.step()) object.keyframe_ids.push_back(static_cast<long>(seen_by.integer(0)));
+      while (seen_by.step()) {
+        const long long keyframe = seen_by.integer(0);
+        if (!map.keyFrameById(static_cast<long>(keyframe))) {
+          if (missing_keyframes++ == 0)
+            first_missing_keyframe = "object " + std::to_string(id) + ", keyframe " + std::to_string(keyframe);
+          continue;
+        }
+        object.keyframe_ids.push_back(static_cast<long>(keyframe));
+      }
       seen_by.reset();
       merged.bind(1, id);
       while (merged.step()) object.merged_classes.push_back(merged.text(0));
@@ -807,6 +855,9 @@ void loadMapDatabase(const std::string& path, Map& map, const PinholeCamera& cam
     if (missing > 0)
       spdlog::warn("{}: {} object_points rows name map points the map does not hold (the first: {}); they are left out",
                    path, missing, first_missing);
+    if (missing_keyframes > 0)
+      spdlog::warn("{}: {} object_keyframes rows name keyframes the map does not hold (the first: {}); they are "
+                   "left out", path, missing_keyframes, first_missing_keyframe);
   }
 }
 

@@ -269,59 +269,74 @@ DetectionSummary System::detectionSummary() const {
   return summary;
 }
 
+namespace {
+
+// The detector-labelled map points and how far keyframes see points: what
+// object landmarks are grouped from.
+struct LabelledScene {
+  std::vector<LabelledPoint> points;
+  std::vector<double> depths;  // keyframe-to-point distances: the scene's scale
+};
+
+// The caller holds map.mutex().
+LabelledScene labelledSceneOf(const Map& map) {
+  LabelledScene scene;
+  for (MapPoint* point : map.mapPoints()) {
+    LabelledPoint entry{point->id(), point->position(), point->classId(), point->classConfidence(), {}, {}};
+    for (const auto& [keyframe, keypoint] : point->observations()) {
+      if (keyframe->isBad()) continue;
+      const Vec3 ray = point->position() - keyframe->cameraCentre();
+      scene.depths.push_back(ray.norm());
+      if (ray.norm() > 0.0) entry.viewing_direction += ray.normalized();
+      entry.keyframe_ids.push_back(keyframe->id());
+      if (entry.class_id < 0 || static_cast<size_t>(keypoint) >= keyframe->labels.size()) continue;
+      const FeatureLabel& label = keyframe->labels[keypoint];
+      if (label.class_id == entry.class_id && label.detection_id >= 0)
+        entry.detections.emplace_back(keyframe->id(), label.detection_id);
+    }
+    if (entry.viewing_direction.norm() > 0.0) entry.viewing_direction.normalize();
+    if (entry.class_id >= 0) scene.points.push_back(std::move(entry));
+  }
+  return scene;
+}
+
+std::vector<ObjectLandmark> objectsOf(LabelledScene scene, const ObjectMapParams& params,
+                                      const std::vector<std::string>& class_names) {
+  const double link_distance = linkDistanceFor(percentile(std::move(scene.depths), 0.5), params);
+  return buildObjectMap(scene.points, link_distance, params, class_names);
+}
+
+}  // namespace
+
 std::vector<ObjectLandmark> System::objectMap(const ObjectMapParams& params) const {
   if (!detection_) return {};
-  std::vector<LabelledPoint> labelled;
-  std::vector<double> depths;  // keyframe-to-point distances: the scene's scale
+  LabelledScene scene;
   {
     std::lock_guard<std::mutex> lock(map_->mutex());
-    for (MapPoint* point : map_->mapPoints()) {
-      LabelledPoint entry{point->id(), point->position(), point->classId(), point->classConfidence(), {}, {}};
-      for (const auto& [keyframe, keypoint] : point->observations()) {
-        if (keyframe->isBad()) continue;
-        const Vec3 ray = point->position() - keyframe->cameraCentre();
-        depths.push_back(ray.norm());
-        if (ray.norm() > 0.0) entry.viewing_direction += ray.normalized();
-        entry.keyframe_ids.push_back(keyframe->id());
-        if (entry.class_id < 0 || static_cast<size_t>(keypoint) >= keyframe->labels.size()) continue;
-        const FeatureLabel& label = keyframe->labels[keypoint];
-        if (label.class_id == entry.class_id && label.detection_id >= 0)
-          entry.detections.emplace_back(keyframe->id(), label.detection_id);
-      }
-      if (entry.viewing_direction.norm() > 0.0) entry.viewing_direction.normalize();
-      if (entry.class_id >= 0) labelled.push_back(std::move(entry));
-    }
+    scene = labelledSceneOf(*map_);
   }
-  const double link_distance = linkDistanceFor(percentile(std::move(depths), 0.5), params);
-  return buildObjectMap(labelled, link_distance, params, detection_->classNames());
+  return objectsOf(std::move(scene), params, detection_->classNames());
 }
 
 void System::saveMap(const std::string& path, const std::string& sequence) const {
-  MapFileHeader header;
-  header.mode = config_.sensor;
-  header.camera = config_.camera;
-  header.orb_levels = config_.orb.n_levels;
-  header.orb_scale_factor = config_.orb.scale_factor;
-  // Computed when first needed: a run that saves no map does not read the vocabulary twice.
-  header.vocabulary_checksum = vocabularyChecksum(vocabulary_path_);
+  // The vocabulary's checksum is computed when first needed: a run that saves
+  // no map does not read the vocabulary twice.
+  MapFileHeader header(mapIdentityOf(config_, vocabulary_path_));
   header.vocabulary_file = vocabulary_path_.empty() ? "none" : vocabulary_path_;
   header.sequence = sequence;
-  const std::vector<ObjectLandmark> objects = objectMap();  // takes the map lock itself
   const std::vector<std::string> class_names = detection_ ? detection_->classNames() : std::vector<std::string>();
+  // One hold of the lock for grouping and writing: otherwise Local Mapping
+  // could cull points between the two, and the objects would describe another map.
   std::lock_guard<std::mutex> lock(map_->mutex());
+  const std::vector<ObjectLandmark> objects =
+      detection_ ? objectsOf(labelledSceneOf(*map_), ObjectMapParams(), class_names) : std::vector<ObjectLandmark>();
   saveMapDatabase(path, *map_, header, objects, class_names);
 }
 
 std::pair<int, int> System::loadMap(const std::string& path, bool localize) {
   if (next_frame_id_ > 0) throw std::logic_error("System::loadMap: only before the first frame");
   const MapFileHeader header = readMapHeader(path);
-  MapRequirements required;
-  required.mode = config_.sensor;
-  required.camera = config_.camera;
-  required.orb_levels = config_.orb.n_levels;
-  required.orb_scale_factor = config_.orb.scale_factor;
-  required.vocabulary_checksum = vocabularyChecksum(vocabulary_path_);
-  checkMapCompatible(path, header, required);
+  checkMapCompatible(path, header, mapIdentityOf(config_, vocabulary_path_));
   std::pair<int, int> loaded;
   {
     std::lock_guard<std::mutex> lock(map_->mutex());

@@ -237,7 +237,7 @@ bool fuzzMapFile(const std::uint8_t* data, std::size_t size) {
     // file made with any camera, mode or vocabulary just as safely.
     const PinholeCamera camera = freiburg1Camera();
     const ScalePyramid pyramid = makeScalePyramid(8, 1.2);
-    MapRequirements required;
+    MapIdentity required;
     required.mode = header.mode;  // the file's, so that the check goes on to compare the camera
     required.camera = camera;
     required.vocabulary_checksum = "ec2a24000922ae8b";  // the seeds' (vocab/orbvoc.bin)

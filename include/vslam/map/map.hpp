@@ -8,9 +8,12 @@
 // (not during feature extraction or detection); Local Mapping and Loop Closing
 // hold it for each step that reads or changes the map, and release it while
 // Ceres solves (they copy values into plain optimisation problems and copy the
-// results back under the lock). Objects are never freed during a run — a
-// culled keyframe or point is only flagged bad — so a pointer taken under the
-// lock stays valid after it is released, though its contents may then change.
+// results back under the lock). System::saveMap holds it once for the whole
+// save, grouping the object landmarks and writing the file, so that the file
+// is one state of the map (System::objectMap holds it only while it reads the
+// points). Objects are never freed during a run — a culled keyframe or point
+// is only flagged bad — so a pointer taken under the lock stays valid after it
+// is released, though its contents may then change.
 //
 // Loop closing adds three rules. (1) Loop Closing pauses Local Mapping
 // (LocalMapping::pause/resume) and holds the lock for the whole correction

@@ -22,17 +22,31 @@ struct ScalePyramid;
 // The version of the tables written here; a reader refuses a larger one.
 inline constexpr int kMapSchemaVersion = 1;
 
-// What a map file says about itself (the map_info and camera tables).
-struct MapFileHeader {
-  int schema_version = kMapSchemaVersion;
+// What a map is made with, and a run that uses it must share: the sensor
+// mode, camera, ORB pyramid and vocabulary (checkMapCompatible compares them).
+struct MapIdentity {
   SensorMode mode = SensorMode::Monocular;
   PinholeCamera camera;
   int orb_levels = 8;
   double orb_scale_factor = 1.2;
   std::string vocabulary_checksum;  // vocabularyChecksum() of the run's vocabulary; "none" without one
-  std::string vocabulary_file;      // for people: where it came from
-  std::string sequence;             // for people: the sequence it was made from
-  std::string created_utc;          // for people: ISO 8601
+};
+
+// The identity of a run with `config` and the vocabulary file at
+// `vocabulary_path` ("" for none): what it saves in a map and what it needs
+// of a map it loads. Reads the vocabulary file (vocabularyChecksum).
+MapIdentity mapIdentityOf(const Config& config, const std::string& vocabulary_path);
+
+// What a map file says about itself (the map_info and camera tables): the
+// identity of the run that saved it, and more.
+struct MapFileHeader : MapIdentity {
+  MapFileHeader() = default;
+  explicit MapFileHeader(const MapIdentity& identity) : MapIdentity(identity) {}
+
+  int schema_version = kMapSchemaVersion;
+  std::string vocabulary_file;  // for people: where the vocabulary came from
+  std::string sequence;         // for people: the sequence it was made from
+  std::string created_utc;      // for people: ISO 8601
 };
 
 // Row counts, for `vslam map info`.
@@ -49,7 +63,9 @@ const char* toString(SensorMode mode);
 
 // Writes the live keyframes and map points of `map` with their graph, the
 // object landmarks and the detector's class names to `path` (caller holds the
-// map lock). Throws InputError naming `path` when it cannot be written; the
+// map lock). An object's points and keyframes that the file does not hold (a
+// point no live keyframe sees, one culled since the objects were grouped) are
+// left out. Throws InputError naming `path` when it cannot be written; the
 // file is then left as it was.
 void saveMapDatabase(const std::string& path, const Map& map, const MapFileHeader& header,
                      const std::vector<ObjectLandmark>& objects, const std::vector<std::string>& class_names);
@@ -59,17 +75,9 @@ void saveMapDatabase(const std::string& path, const Map& map, const MapFileHeade
 MapFileHeader readMapHeader(const std::string& path);
 MapFileCounts readMapCounts(const std::string& path);
 
-// What a run needs of a map to use it; checkMapCompatible throws InputError
-// naming `path` when the map was made with another camera, sensor mode, ORB
-// pyramid or vocabulary.
-struct MapRequirements {
-  SensorMode mode = SensorMode::Monocular;
-  PinholeCamera camera;
-  int orb_levels = 8;
-  double orb_scale_factor = 1.2;
-  std::string vocabulary_checksum;
-};
-void checkMapCompatible(const std::string& path, const MapFileHeader& header, const MapRequirements& required);
+// Throws InputError naming `path` when the map was made with another camera,
+// sensor mode, ORB pyramid or vocabulary than `required` (the run's identity).
+void checkMapCompatible(const std::string& path, const MapFileHeader& header, const MapIdentity& required);
 
 // Reads the map into `map` (empty), its keyframes seeing through `camera` and
 // `pyramid` (which outlive it); checks every link first (consistency). The

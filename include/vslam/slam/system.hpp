@@ -154,7 +154,9 @@ class System {
   int lastTrackedPoints() const;
   // Writes the whole map, its object landmarks and what it was made with to
   // `path` (SQLite, docs/MAPS.md), atomically; `sequence` is recorded for
-  // people. Throws InputError naming `path` when it cannot be written.
+  // people. The objects are grouped and the map written under one hold of the
+  // map lock, so the file is one state of the map even while Local Mapping and
+  // Loop Closing run. Throws InputError naming `path` when it cannot be written.
   void saveMap(const std::string& path, const std::string& sequence) const;
   // Loads a saved map before the first frame (throws std::logic_error later):
   // refused with an InputError naming `path` when it is corrupt or was made

@@ -224,5 +224,27 @@ TEST(Config, DetectEveryIsReadAndCheckedWithItsLine) {
   EXPECT_THROW(parseConfig(camera + "detector:\n  max_box_age: -1\n", "bad.yaml"), InputError);
 }
 
+TEST(Config, InitializerKeysAreReadAndTheWindowLevelIsCheckedWithItsLine) {
+  const std::string camera = "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: 500\n  cx: 320\n  cy: 240\n";
+  const Config config = parseConfig(
+      camera + "initializer:\n  window_max_level: 2\n  max_translation_direction_std_deg: 3.5\n", "init.yaml");
+  EXPECT_EQ(config.initializer.window_max_level, 2);
+  EXPECT_DOUBLE_EQ(config.initializer.max_translation_direction_std_deg, 3.5);
+  EXPECT_EQ(parseConfig(camera, "none.yaml").initializer.window_max_level, 0);  // ORB-SLAM's finest level only
+  // The road configs search level 1 too (issue 18); the TUM ones keep ORB-SLAM's rule.
+  EXPECT_EQ(loadConfig(projectConfigDir() + "/kitti_00-02.yaml").initializer.window_max_level, 1);
+  EXPECT_EQ(loadConfig(projectConfigDir() + "/tum_fr1.yaml").initializer.window_max_level, 0);
+
+  for (const std::string bad : {"-1", "8", "12"}) {  // 8 levels: 0 to 7
+    try {
+      parseConfig(camera + "initializer:\n  window_max_level: " + bad + "\n", "bad.yaml");
+      ADD_FAILURE() << "accepted window_max_level " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.yaml:9:"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("initializer.window_max_level"), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace vslam

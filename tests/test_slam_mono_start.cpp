@@ -1,9 +1,10 @@
-// The monocular start on real data with a short, rotation-heavy baseline:
-// Bonn RGB-D Dynamic `crowd` (../shared, 300 frames; people walk through an
-// office while the camera turns). Its consecutive-frame attempts find F
+// The monocular start on real data. Bonn RGB-D Dynamic `crowd` (../shared,
+// 300 frames; people walk through an office while the camera turns) has a
+// short, rotation-heavy baseline. Its consecutive-frame attempts find F
 // motions whose translation direction is known only to 5-8 deg; before the
 // initializer refused them (issue 16), the map started at frame 9 on such a
 // motion and ended 3.3 cm (deterministic) / 4.1-5.3 cm (threaded) off.
+// KITTI 00 (200 frames) drives forward at 10 Hz.
 // Deterministic mode, so that the figures do not depend on timing.
 #include <iostream>
 
@@ -41,6 +42,32 @@ TEST(SlamMonoStart, BonnCrowdStartsFromAWellDeterminedMotion) {
   EXPECT_GE(system.frameTrajectory().size(), 270u);
   EXPECT_LT(keyframe_ate.rmse_m, 0.026);
   EXPECT_LT(frame_ate.rmse_m, 0.045);
+}
+
+TEST(SlamMonoStart, KittiRoadStartsWithinTheFirstSecond) {
+  // With config/kitti_00-02.yaml (window search on pyramid levels 0-1).
+  const Sequence sequence = test::openSharedSequence("kitti/00");
+  Config config = sequence.config;
+  config.detector.model = "none";
+  SystemOptions options;
+  options.deterministic = true;
+  System system(config, options);
+  for (size_t i = 0; i < sequence.frames.size(); ++i)
+    system.processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, sequence.loadColor(i));
+  system.finish();
+
+  AteOptions ate_options;
+  ate_options.alignment = Alignment::Sim3;
+  const AteResult keyframe_ate = computeAte(system.keyframeTrajectory(), sequence.groundtruth, ate_options);
+  std::cout << "initialised at frame " << system.stats().initialised_at_index << ", "
+            << system.frameTrajectory().size() << " of " << sequence.frames.size() << " frames tracked, keyframe ATE "
+            << keyframe_ate.rmse_m << " m\n";
+  // Measured: frame 2, 199 of 200, 0.726 m (before, level 0 only: frame 13,
+  // 188, 0.884 m). Issue 18: start within the first second (10 frames),
+  // track at least 98 %.
+  EXPECT_LT(system.stats().initialised_at_index, 10);
+  EXPECT_GE(system.frameTrajectory().size(), 196u);
+  EXPECT_LT(keyframe_ate.rmse_m, 1.0);
 }
 
 }  // namespace

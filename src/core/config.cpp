@@ -136,6 +136,12 @@ Config loadVslamYaml(const std::string& text, const std::string& path) {
   reader.optional(init, "initializer", "min_triangulated", config.initializer.min_triangulated);
   reader.optional(init, "initializer", "max_translation_direction_std_deg",
                   config.initializer.max_translation_direction_std_deg);
+  reader.optional(init, "initializer", "window_max_level", config.initializer.window_max_level);
+  if (config.initializer.window_max_level < 0 || config.initializer.window_max_level >= config.orb.n_levels)
+    throw InputError(path, init.IsDefined() ? init.Mark().line + 1 : 0,
+                     "initializer.window_max_level must be a pyramid level, 0 to orb.n_levels - 1 (" +
+                         std::to_string(config.orb.n_levels - 1) + "), not " +
+                         std::to_string(config.initializer.window_max_level));
 
   const YAML::Node trk = reader.section("tracking");
   reader.optional(trk, "tracking", "max_frames_between_keyframes", config.tracking.max_frames_between_keyframes);

@@ -195,9 +195,10 @@ VSLAM_POPCNT_CLONES WindowMatches matchInWindow(const FeatureView& frame1, const
   std::vector<int> distance21(n2, std::numeric_limits<int>::max());
 
   for (int i1 = 0; i1 < n1; ++i1) {
-    if (frame1.keypoints[i1].octave > 0) continue;  // only the finest level, as ORB-SLAM
+    const int level = frame1.keypoints[i1].octave;
+    if (level > params.max_level) continue;
     const std::vector<int> candidates =
-        grid2.featuresInArea(prev_matched[i1].x, prev_matched[i1].y, params.window, 0, 0);
+        grid2.featuresInArea(prev_matched[i1].x, prev_matched[i1].y, params.window, level, level);
     int best = std::numeric_limits<int>::max(), second = std::numeric_limits<int>::max(), best_i2 = -1;
     for (int i2 : candidates) {
       const int d = hammingDistance(row(frame1.descriptors, i1), row(frame2.descriptors, i2));

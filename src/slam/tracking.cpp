@@ -236,6 +236,7 @@ void Tracking::initialise(Frame& frame) {
   const Frame& reference = *init_reference_;
   WindowMatchParams window;
   window.window = static_cast<float>(kInitWindowPx);
+  window.max_level = config_.initializer.window_max_level;
   const WindowMatches matched = matchInWindow(reference.view(), frame.view(), frame.grid, init_prev_matched_, window);
   const std::vector<int>& matches_ref_cur = matched.matches12;
   if (matched.count < kInitMinMatches) {

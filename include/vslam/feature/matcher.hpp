@@ -136,6 +136,9 @@ struct WindowMatchParams {
   float ratio = 0.9f;    // best < ratio * second best
   int max_distance = kHammingThresholdWindow;
   bool check_orientation = true;
+  // Coarsest pyramid level searched; each feature is matched within its own
+  // level. ORB-SLAM uses the finest only (0).
+  int max_level = 0;
 };
 
 struct WindowMatches {
@@ -143,8 +146,9 @@ struct WindowMatches {
   int count = 0;
 };
 
-// Matching for map initialisation. For every level-0 feature of frame 1,
-// candidates are the level-0 features of frame 2 (from grid2) within `window` of
+// Matching for map initialisation. For every feature of frame 1 at a level up
+// to params.max_level (0: the finest only, as ORB-SLAM), candidates are the
+// features of frame 2 at the same level (from grid2) within `window` of
 // prev_matched[i1] (start with frame 1's own points). The best must pass the
 // absolute threshold and the ratio test; a frame-2 feature claimed twice keeps
 // the closer; survivors pass the rotation check. prev_matched is updated to the

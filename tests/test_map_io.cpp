@@ -563,6 +563,18 @@ class CapturedLog {
   std::shared_ptr<spdlog::logger> previous_;
 };
 
+// Loads `path` with the fixture's camera and returns its objects, and what the
+// loader logged meanwhile in `log`.
+std::vector<ObjectLandmark> loadObjectsLogging(const std::string& path, const PinholeCamera& camera,
+                                               const ScalePyramid& pyramid, std::string& log) {
+  Map loaded;
+  std::vector<ObjectLandmark> objects;
+  const CapturedLog captured;
+  loadMapDatabase(path, loaded, camera, pyramid, &objects);
+  log = captured.text();
+  return objects;
+}
+
 // object_points may name a map point the file does not hold: maps saved
 // before the writer left such members out have them (objects are grouped from
 // every live point, but a point that no live keyframe sees, or whose keypoints
@@ -571,14 +583,8 @@ class CapturedLog {
 TEST_F(MapIoTest, LeavesOutObjectPointsThatAreNotInTheMap) {
   const std::string path = save("map.sqlite");
   edit(path, "INSERT INTO object_points VALUES(0, 777, 0); INSERT INTO object_points VALUES(0, 778, 1)");
-  Map loaded;
-  std::vector<ObjectLandmark> objects;
   std::string log;
-  {
-    const CapturedLog captured;
-    loadMapDatabase(path, loaded, camera_, pyramid_, &objects);
-    log = captured.text();
-  }
+  const std::vector<ObjectLandmark> objects = loadObjectsLogging(path, camera_, pyramid_, log);
   ASSERT_EQ(objects.size(), 1u);
   EXPECT_EQ(objects[0].point_ids, (std::vector<long>{0, 5, 10}));
   EXPECT_EQ(objects[0].rejected_point_ids, (std::vector<long>{15}));
@@ -593,14 +599,8 @@ TEST_F(MapIoTest, LeavesOutObjectPointsThatAreNotInTheMap) {
 TEST_F(MapIoTest, LeavesOutObjectKeyFramesThatAreNotInTheMap) {
   const std::string path = save("map.sqlite");
   edit(path, "INSERT INTO object_keyframes VALUES(0, 3); INSERT INTO object_keyframes VALUES(0, 777)");
-  Map loaded;
-  std::vector<ObjectLandmark> objects;
   std::string log;
-  {
-    const CapturedLog captured;
-    loadMapDatabase(path, loaded, camera_, pyramid_, &objects);
-    log = captured.text();
-  }
+  const std::vector<ObjectLandmark> objects = loadObjectsLogging(path, camera_, pyramid_, log);
   ASSERT_EQ(objects.size(), 1u);
   EXPECT_EQ(objects[0].keyframe_ids, (std::vector<long>{0, 1, 2}));
   EXPECT_NE(log.find(path + ": 2 object_keyframes rows name keyframes the map does not hold (the first: object 0, "

@@ -7,6 +7,7 @@
 // KITTI 00 (200 frames) drives forward at 10 Hz.
 // Deterministic mode, so that the figures do not depend on timing.
 #include <iostream>
+#include <memory>
 
 #include <gtest/gtest.h>
 
@@ -17,17 +18,24 @@
 namespace vslam {
 namespace {
 
-TEST(SlamMonoStart, BonnCrowdStartsFromAWellDeterminedMotion) {
-  const Sequence sequence = test::openSharedSequence("bonn/crowd");
+// Every frame of `sequence`, monocular, detector off, deterministic.
+std::unique_ptr<System> runMonocular(const Sequence& sequence) {
   Config config = sequence.config;
   config.sensor = SensorMode::Monocular;
   config.detector.model = "none";
   SystemOptions options;
   options.deterministic = true;
-  System system(config, options);
+  auto system = std::make_unique<System>(config, options);
   for (size_t i = 0; i < sequence.frames.size(); ++i)
-    system.processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, sequence.loadColor(i));
-  system.finish();
+    system->processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, sequence.loadColor(i));
+  system->finish();
+  return system;
+}
+
+TEST(SlamMonoStart, BonnCrowdStartsFromAWellDeterminedMotion) {
+  const Sequence sequence = test::openSharedSequence("bonn/crowd");
+  const std::unique_ptr<System> run = runMonocular(sequence);
+  const System& system = *run;
 
   const SystemStats stats = system.stats();
   AteOptions ate_options;
@@ -47,14 +55,8 @@ TEST(SlamMonoStart, BonnCrowdStartsFromAWellDeterminedMotion) {
 TEST(SlamMonoStart, KittiRoadStartsWithinTheFirstSecond) {
   // With config/kitti_00-02.yaml (window search on pyramid levels 0-1).
   const Sequence sequence = test::openSharedSequence("kitti/00");
-  Config config = sequence.config;
-  config.detector.model = "none";
-  SystemOptions options;
-  options.deterministic = true;
-  System system(config, options);
-  for (size_t i = 0; i < sequence.frames.size(); ++i)
-    system.processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, sequence.loadColor(i));
-  system.finish();
+  const std::unique_ptr<System> run = runMonocular(sequence);
+  const System& system = *run;
 
   AteOptions ate_options;
   ate_options.alignment = Alignment::Sim3;

@@ -238,24 +238,41 @@ struct SampsonResidual {
 // 8-point/DLT estimates minimise an algebraic error, this minimises (to first
 // order) the geometric one, over the 5 degrees of freedom of a calibrated
 // motion. Huber-robust at the F inlier bound.
-SE3 refineMotion(const SE3& initial, const Mat3& K, const Matches& m, const std::vector<bool>& use) {
+// A calibrated motion as Ceres parameters (angle-axis rotation, unit
+// translation on the sphere) with one Sampson residual per used match.
+struct SampsonProblem {
   double angle_axis[3];
-  double translation[3] = {initial.t.x(), initial.t.y(), initial.t.z()};
-  const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> R_row = initial.R;
-  ceres::RotationMatrixToAngleAxis(ceres::RowMajorAdapter3x3(R_row.data()), angle_axis);
+  double translation[3];
   ceres::Problem problem;
-  const Mat3 K_inv = K.inverse();
   int n_used = 0;
-  for (size_t i = 0; i < m.size(); ++i) {
-    if (!use[i]) continue;
-    const double inv_sigma = std::sqrt(std::min(m.inv_sigma2_ref[i], m.inv_sigma2_cur[i]));
-    auto* cost = new ceres::AutoDiffCostFunction<SampsonResidual, 1, 3, 3>(
-        new SampsonResidual(K_inv * m.ref[i].homogeneous(), K_inv * m.cur[i].homogeneous(), K, inv_sigma));
-    problem.AddResidualBlock(cost, new ceres::HuberLoss(std::sqrt(kChi2_1dof)), angle_axis, translation);
-    ++n_used;
+
+  // `robust`: Huber at the F inlier bound, for solving; plain squares for a covariance.
+  SampsonProblem(const SE3& motion, const Mat3& K, const Matches& m, const std::vector<bool>& use, bool robust)
+      : translation{motion.t.x(), motion.t.y(), motion.t.z()} {
+    const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> R_row = motion.R;
+    ceres::RotationMatrixToAngleAxis(ceres::RowMajorAdapter3x3(R_row.data()), angle_axis);
+    const Mat3 K_inv = K.inverse();
+    for (size_t i = 0; i < m.size(); ++i) {
+      if (!use[i]) continue;
+      const double inv_sigma = std::sqrt(std::min(m.inv_sigma2_ref[i], m.inv_sigma2_cur[i]));
+      auto* cost = new ceres::AutoDiffCostFunction<SampsonResidual, 1, 3, 3>(
+          new SampsonResidual(K_inv * m.ref[i].homogeneous(), K_inv * m.cur[i].homogeneous(), K, inv_sigma));
+      problem.AddResidualBlock(cost, robust ? new ceres::HuberLoss(std::sqrt(kChi2_1dof)) : nullptr, angle_axis,
+                               translation);
+      ++n_used;
+    }
+    // The sphere needs a translation of length > 0; callers check usable() first.
+    if (usable(motion)) problem.SetManifold(translation, new ceres::SphereManifold<3>());
   }
-  if (n_used < kMinimalSetSize || initial.t.norm() == 0) return initial;
-  problem.SetManifold(translation, new ceres::SphereManifold<3>());
+  bool usable(const SE3& motion) const { return n_used >= kMinimalSetSize && motion.t.norm() > 0; }
+};
+
+SE3 refineMotion(const SE3& initial, const Mat3& K, const Matches& m, const std::vector<bool>& use) {
+  SampsonProblem sampson(initial, K, m, use, true);
+  if (!sampson.usable(initial)) return initial;
+  double* angle_axis = sampson.angle_axis;
+  double* translation = sampson.translation;
+  ceres::Problem& problem = sampson.problem;
   ceres::Solver::Options options;
   options.max_num_iterations = 20;
   options.linear_solver_type = ceres::DENSE_QR;
@@ -275,28 +292,14 @@ SE3 refineMotion(const SE3& initial, const Mat3& K, const Matches& m, const std:
 // the used matches (each scaled by its sigma), with the rotation
 // marginalised. +inf when the direction is not constrained at all.
 double translationDirectionStdDeg(const SE3& motion, const Mat3& K, const Matches& m, const std::vector<bool>& use) {
-  double angle_axis[3];
-  double translation[3] = {motion.t.x(), motion.t.y(), motion.t.z()};
-  const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> R_row = motion.R;
-  ceres::RotationMatrixToAngleAxis(ceres::RowMajorAdapter3x3(R_row.data()), angle_axis);
-  ceres::Problem problem;
-  const Mat3 K_inv = K.inverse();
-  int n_used = 0;
-  for (size_t i = 0; i < m.size(); ++i) {
-    if (!use[i]) continue;
-    const double inv_sigma = std::sqrt(std::min(m.inv_sigma2_ref[i], m.inv_sigma2_cur[i]));
-    auto* cost = new ceres::AutoDiffCostFunction<SampsonResidual, 1, 3, 3>(
-        new SampsonResidual(K_inv * m.ref[i].homogeneous(), K_inv * m.cur[i].homogeneous(), K, inv_sigma));
-    problem.AddResidualBlock(cost, nullptr, angle_axis, translation);
-    ++n_used;
-  }
-  if (n_used < kMinimalSetSize || motion.t.norm() == 0) return std::numeric_limits<double>::infinity();
-  problem.SetManifold(translation, new ceres::SphereManifold<3>());
+  SampsonProblem sampson(motion, K, m, use, false);
+  if (!sampson.usable(motion)) return std::numeric_limits<double>::infinity();
   ceres::Covariance::Options options;
   options.algorithm_type = ceres::DENSE_SVD;
   ceres::Covariance covariance(options);
+  const double* translation = sampson.translation;
   const std::vector<std::pair<const double*, const double*>> blocks = {{translation, translation}};
-  if (!covariance.Compute(blocks, &problem)) return std::numeric_limits<double>::infinity();
+  if (!covariance.Compute(blocks, &sampson.problem)) return std::numeric_limits<double>::infinity();
   Eigen::Matrix<double, 3, 3, Eigen::RowMajor> cov;
   covariance.GetCovarianceBlock(translation, translation, cov.data());
   const Mat3 cov_t = cov;

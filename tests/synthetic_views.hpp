@@ -1,8 +1,8 @@
 #pragma once
-// The camera and ORB pyramid that tests on hand-built keyframes share: a VGA
-// pinhole camera without distortion, and the paper's 8 levels at 1.2.
+// The camera that tests on hand-built keyframes share: a VGA pinhole camera
+// without distortion. Their ORB pyramid is makeScalePyramid's
+// (vslam/map_io/map_database.hpp), the extractor's own.
 #include "vslam/core/camera.hpp"
-#include "vslam/map/frame.hpp"
 
 namespace vslam::test {
 
@@ -14,19 +14,6 @@ inline PinholeCamera vgaCamera() {
   camera.cx = 320;
   camera.cy = 240;
   return camera;
-}
-
-inline ScalePyramid scalePyramid(int levels = 8, double scale_factor = 1.2) {
-  ScalePyramid pyramid;
-  pyramid.levels = levels;
-  pyramid.scale_factor = scale_factor;
-  double scale = 1;
-  for (int level = 0; level < levels; ++level, scale *= scale_factor) {
-    pyramid.scale.push_back(scale);
-    pyramid.sigma2.push_back(scale * scale);
-    pyramid.inv_sigma2.push_back(1 / (scale * scale));
-  }
-  return pyramid;
 }
 
 }  // namespace vslam::test

@@ -8,6 +8,7 @@
 
 #include "synthetic_views.hpp"
 #include "vslam/map/map.hpp"
+#include "vslam/map_io/map_database.hpp"
 #include "vslam/place/keyframe_database.hpp"
 #include "vslam/slam/local_mapping.hpp"
 #include "vslam/slam/place_candidates.hpp"
@@ -49,7 +50,7 @@ class MapGraphTest : public ::testing::Test {
   }
 
   PinholeCamera camera_ = test::vgaCamera();
-  ScalePyramid pyramid_ = test::scalePyramid();
+  ScalePyramid pyramid_ = makeScalePyramid(8, 1.2);
   Map map_;
 };
 

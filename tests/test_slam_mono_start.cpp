@@ -18,13 +18,14 @@
 namespace vslam {
 namespace {
 
-// Every frame of `sequence`, monocular, detector off, deterministic.
-std::unique_ptr<System> runMonocular(const Sequence& sequence) {
+// Every frame of `sequence`, monocular, detector off; deterministic (lock-step)
+// or threaded as `vslam run` runs.
+std::unique_ptr<System> runMonocular(const Sequence& sequence, bool deterministic = true) {
   Config config = sequence.config;
   config.sensor = SensorMode::Monocular;
   config.detector.model = "none";
   SystemOptions options;
-  options.deterministic = true;
+  options.deterministic = deterministic;
   auto system = std::make_unique<System>(config, options);
   for (size_t i = 0; i < sequence.frames.size(); ++i)
     system->processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, sequence.loadColor(i));
@@ -52,10 +53,10 @@ TEST(SlamMonoStart, BonnCrowdStartsFromAWellDeterminedMotion) {
   EXPECT_LT(frame_ate.rmse_m, 0.045);
 }
 
-TEST(SlamMonoStart, KittiRoadStartsWithinTheFirstSecond) {
+void expectKittiRoadStartsWithinTheFirstSecond(bool deterministic) {
   // With config/kitti_00-02.yaml (window search on pyramid levels 0-1).
   const Sequence sequence = test::openSharedSequence("kitti/00");
-  const std::unique_ptr<System> run = runMonocular(sequence);
+  const std::unique_ptr<System> run = runMonocular(sequence, deterministic);
   const System& system = *run;
 
   AteOptions ate_options;
@@ -64,13 +65,19 @@ TEST(SlamMonoStart, KittiRoadStartsWithinTheFirstSecond) {
   std::cout << "initialised at frame " << system.stats().initialised_at_index << ", "
             << system.frameTrajectory().size() << " of " << sequence.frames.size() << " frames tracked, keyframe ATE "
             << keyframe_ate.rmse_m << " m\n";
-  // Measured: frame 2, 199 of 200, 0.726 m (before, level 0 only: frame 13,
-  // 188, 0.884 m). Issue 18: start within the first second (10 frames),
-  // track at least 98 %.
+  // Measured: frame 2, 199 of 200, 0.726 m deterministic, 0.795 m threaded
+  // (before, level 0 only: frame 13, 188, 0.884 / 0.963 m). Issue 18: start
+  // within the first second (10 frames), track at least 98 %.
   EXPECT_LT(system.stats().initialised_at_index, 10);
   EXPECT_GE(system.frameTrajectory().size(), 196u);
   EXPECT_LT(keyframe_ate.rmse_m, 1.0);
 }
+
+TEST(SlamMonoStart, KittiRoadStartsWithinTheFirstSecond) { expectKittiRoadStartsWithinTheFirstSecond(true); }
+
+// The start is Tracking's alone, so it is the same threaded; so, on these
+// 200 frames, are the frames tracked (every threaded run measured: 199).
+TEST(SlamMonoStart, KittiRoadStartsWithinTheFirstSecondThreaded) { expectKittiRoadStartsWithinTheFirstSecond(false); }
 
 }  // namespace
 }  // namespace vslam

@@ -8,6 +8,7 @@
 
 #include "synthetic_views.hpp"
 #include "vslam/map/map_point.hpp"
+#include "vslam/map_io/map_database.hpp"
 #include "vslam/slam/moving_objects.hpp"
 
 namespace vslam {
@@ -53,7 +54,7 @@ class MovingObjectsTest : public ::testing::Test {
   }
 
   PinholeCamera camera_ = test::vgaCamera();
-  ScalePyramid pyramid_ = test::scalePyramid(1);
+  ScalePyramid pyramid_ = makeScalePyramid(1, 1.2);
   Frame frame_;
   std::vector<std::unique_ptr<MapPoint>> points_;
 };

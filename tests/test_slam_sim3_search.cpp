@@ -13,6 +13,7 @@
 
 #include "synthetic_views.hpp"
 #include "vslam/map/map.hpp"
+#include "vslam/map_io/map_database.hpp"
 #include "vslam/slam/map_matching.hpp"
 
 namespace vslam {
@@ -89,7 +90,7 @@ class Sim3SearchTest : public ::testing::Test {
   }
 
   PinholeCamera camera_ = test::vgaCamera();
-  ScalePyramid pyramid_ = test::scalePyramid();
+  ScalePyramid pyramid_ = makeScalePyramid(8, 1.2);
   Map map_;
 };
 

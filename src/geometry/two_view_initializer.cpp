@@ -270,19 +270,16 @@ struct SampsonProblem {
 SE3 refineMotion(const SE3& initial, const Mat3& K, const Matches& m, const std::vector<bool>& use) {
   SampsonProblem sampson(initial, K, m, use, true);
   if (!sampson.usable(initial)) return initial;
-  double* angle_axis = sampson.angle_axis;
-  double* translation = sampson.translation;
-  ceres::Problem& problem = sampson.problem;
   ceres::Solver::Options options;
   options.max_num_iterations = 20;
   options.linear_solver_type = ceres::DENSE_QR;
   options.num_threads = 1;
   ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
+  ceres::Solve(options, &sampson.problem, &summary);
   if (!summary.IsSolutionUsable()) return initial;
   Eigen::Matrix<double, 3, 3, Eigen::RowMajor> R_refined;
-  ceres::AngleAxisToRotationMatrix(angle_axis, ceres::RowMajorAdapter3x3(R_refined.data()));
-  const Vec3 t_refined(translation[0], translation[1], translation[2]);
+  ceres::AngleAxisToRotationMatrix(sampson.angle_axis, ceres::RowMajorAdapter3x3(R_refined.data()));
+  const Vec3 t_refined(sampson.translation[0], sampson.translation[1], sampson.translation[2]);
   if (!R_refined.allFinite() || !t_refined.allFinite()) return initial;
   return SE3(R_refined, t_refined.normalized());
 }
@@ -300,10 +297,9 @@ double translationDirectionStdDeg(const SE3& motion, const Mat3& K, const Matche
   const double* translation = sampson.translation;
   const std::vector<std::pair<const double*, const double*>> blocks = {{translation, translation}};
   if (!covariance.Compute(blocks, &sampson.problem)) return std::numeric_limits<double>::infinity();
-  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> cov;
+  Mat3 cov;  // Ceres writes it row-major; symmetric, so the storage order does not matter
   covariance.GetCovarianceBlock(translation, translation, cov.data());
-  const Mat3 cov_t = cov;
-  const Eigen::SelfAdjointEigenSolver<Mat3> eigen(cov_t);
+  const Eigen::SelfAdjointEigenSolver<Mat3> eigen(cov);
   return toDeg(std::sqrt(std::max(0.0, eigen.eigenvalues().maxCoeff())));
 }
 

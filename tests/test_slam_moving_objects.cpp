@@ -59,6 +59,58 @@ class MovingObjectsTest : public ::testing::Test {
   std::vector<std::unique_ptr<MapPoint>> points_;
 };
 
+// With depth, keypoints of a person's box well behind the person (the wall
+// seen around them) go back to the static scene; the person's own keypoints,
+// and those without depth, keep the box's label. The person's depth is the
+// median over the box's central half: 2.0 m here, so "behind" starts at
+// 2.0 x 1.15 + 0.3 = 2.6 m.
+TEST_F(MovingObjectsTest, KeypointsBehindTheObjectGoBackToTheStaticScene) {
+  struct Keypoint {
+    cv::Point2f pixel;
+    float depth;
+  };
+  // Box x 100-300, y 100-400: its central half is x 150-250, y 175-325.
+  const std::vector<Keypoint> keypoints = {
+      {{200, 200}, 1.9f}, {{210, 250}, 2.0f}, {{190, 300}, 2.1f}, {{160, 180}, 2.0f}, {{240, 320}, 5.0f},  // core
+      {{110, 110}, 2.59f},  // the person's edge, just in front of 2.6 m
+      {{290, 390}, 2.61f},  // just behind: the wall
+      {{120, 390}, 6.0f},   // the wall
+      {{280, 120}, -1.f},   // no depth: stays the person's
+      {{500, 200}, 6.0f}};  // outside the box
+  for (const Keypoint& k : keypoints) {
+    frame_.keypoints.emplace_back(k.pixel, 31.f);
+    frame_.depth.push_back(k.depth);
+  }
+  const std::vector<Detection> detections = {box(0, kPerson, 100, 100, 200, 300)};
+  labelMovableKeypoints(detections, {kPerson}, frame_);
+  releaseBackgroundByDepth(detections, frame_);
+  const std::vector<ObjectMotion> expected = {
+      ObjectMotion::Unchecked,  ObjectMotion::Unchecked,  ObjectMotion::Unchecked, ObjectMotion::Unchecked,
+      ObjectMotion::NotMovable, ObjectMotion::Unchecked,  ObjectMotion::NotMovable, ObjectMotion::NotMovable,
+      ObjectMotion::Unchecked,  ObjectMotion::NotMovable};
+  ASSERT_EQ(frame_.labels.size(), expected.size());
+  for (size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_EQ(frame_.labels[i].motion, expected[i]) << "keypoint " << i;
+    const bool the_persons = expected[i] == ObjectMotion::Unchecked;
+    EXPECT_EQ(frame_.labels[i].class_id, the_persons ? kPerson : -1) << "keypoint " << i;
+  }
+
+  // Fewer than 5 depths in the central half: the box is left as labelled.
+  Frame few = frame_;
+  few.labels.clear();
+  for (size_t i = 0; i < 3; ++i) few.depth[i] = -1.f;
+  labelMovableKeypoints(detections, {kPerson}, few);
+  releaseBackgroundByDepth(detections, few);
+  EXPECT_EQ(few.labels[7].motion, ObjectMotion::Unchecked);
+  // A frame without depth is left alone too.
+  Frame mono = few;
+  mono.depth.clear();
+  mono.labels.clear();
+  labelMovableKeypoints(detections, {kPerson}, mono);
+  releaseBackgroundByDepth(detections, mono);
+  EXPECT_EQ(mono.labels[7].motion, ObjectMotion::Unchecked);
+}
+
 TEST_F(MovingObjectsTest, LabelsKeypointsInBoxesOfMovableClassesOnly) {
   for (const cv::Point2f p : {cv::Point2f(50, 50), cv::Point2f(150, 150), cv::Point2f(199.5f, 100), cv::Point2f(200, 100),
                               cv::Point2f(420, 300)})

@@ -83,8 +83,9 @@ Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& b
   // A copy: the boxes are carried by these after the filter has changed the frame's own.
   const FeatureSnapshot own{index, frame.keypoints, frame.descriptors.clone()};
   if (own_features) *own_features = own;
+  std::vector<Detection> detections;
   if (boxes) {
-    const std::vector<Detection> detections = boxes(own);
+    detections = boxes(own);
     const auto start = std::chrono::steady_clock::now();
     // Per box: the configured count (or the frame's), on the same pyramid, as Algorithm 1 asks.
     const int per_box = featuresPerBox(config_.detector, config_.orb);
@@ -122,6 +123,7 @@ Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& b
     if (depth_m.size() != bgr.size() || depth_m.type() != CV_32F)
       throw std::invalid_argument("FrameBuilder: the depth image must be CV_32F and of the colour image's size");
     sampleDepth(depth_m, frame);
+    releaseBackgroundByDepth(detections, frame);
   }
   frame.finalizeFeatures(undistorted_bounds_);
   return frame;

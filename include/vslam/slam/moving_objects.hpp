@@ -28,6 +28,21 @@ constexpr long kMotionCheckMinPointAgeFrames = 10;
 void labelMovableKeypoints(const std::vector<Detection>& detections, const std::vector<int>& movable_class_ids,
                            Frame& frame);
 
+// With depth, a movable box's keypoints well behind the object are the
+// static scene seen around it, not the object: they are given back to the
+// static scene (NotMovable, no class) before the box is judged, so that a person's box
+// is judged by the person's own points rather than by the wall behind them.
+// The object's depth is the median depth of the box's keypoints in its central
+// part; "well behind" is beyond that by kBackgroundDepthMargin plus
+// kBackgroundDepthRatio of it. Keypoints without depth keep their label.
+constexpr double kBackgroundDepthMargin = 0.3;  // metres
+constexpr double kBackgroundDepthRatio = 0.15;
+// The central part: the middle half of the box's width and height.
+constexpr float kObjectCoreFraction = 0.5f;
+// Fewer keypoints with depth in the central part than this: the box is left alone.
+constexpr int kMinObjectCoreDepths = 5;
+void releaseBackgroundByDepth(const std::vector<Detection>& detections, Frame& frame);
+
 struct ObjectMotionVerdict {
   int detection_id = -1;
   int class_id = -1;

@@ -244,6 +244,21 @@ TEST(Config, InitializerKeysAreReadAndTheWindowLevelIsCheckedWithItsLine) {
       EXPECT_NE(std::string(e.what()).find("initializer.window_max_level"), std::string::npos) << e.what();
     }
   }
+  // A bound of 0 or less (or NaN) would refuse every motion from F.
+  for (const std::string bad : {"0", "-2", ".nan", "181"}) {
+    try {
+      parseConfig(camera + "initializer:\n  max_translation_direction_std_deg: " + bad + "\n", "bad.yaml");
+      ADD_FAILURE() << "accepted max_translation_direction_std_deg " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.yaml:9:"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("initializer.max_translation_direction_std_deg"), std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_DOUBLE_EQ(
+      parseConfig(camera + "initializer:\n  max_translation_direction_std_deg: 180\n", "edge.yaml")
+          .initializer.max_translation_direction_std_deg,
+      180.0);
 }
 
 }  // namespace

@@ -136,6 +136,12 @@ Config loadVslamYaml(const std::string& text, const std::string& path) {
   reader.optional(init, "initializer", "min_triangulated", config.initializer.min_triangulated);
   reader.optional(init, "initializer", "max_translation_direction_std_deg",
                   config.initializer.max_translation_direction_std_deg);
+  // 0 or less would refuse every motion from F (NaN too): the map would never start from one.
+  const double direction_bound = config.initializer.max_translation_direction_std_deg;
+  if (!(direction_bound > 0 && direction_bound <= 180))
+    throw InputError(path, init.IsDefined() ? init.Mark().line + 1 : 0,
+                     "initializer.max_translation_direction_std_deg must lie in (0, 180] degrees, not " +
+                         std::to_string(direction_bound));
   reader.optional(init, "initializer", "window_max_level", config.initializer.window_max_level);
   if (config.initializer.window_max_level < 0 || config.initializer.window_max_level >= config.orb.n_levels)
     throw InputError(path, init.IsDefined() ? init.Mark().line + 1 : 0,

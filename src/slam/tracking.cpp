@@ -706,16 +706,36 @@ bool Tracking::trackLocalMap(Frame& frame) {
     if (!localization_only_) point->increaseFound();
     if (point->observationCount() > 0) ++matches_inliers_;
   }
+  return matches_inliers_ >= inliersNeeded(frame);
+}
+
+int Tracking::inliersNeeded(const Frame& frame) const {
   const bool recently_relocalised =
       last_relocalisation_frame_id_ >= 0 &&
       frame.id < last_relocalisation_frame_id_ + config_.tracking.max_frames_between_keyframes;
-  return matches_inliers_ >= (recently_relocalised ? 50 : config_.tracking.min_inliers);
+  return recently_relocalised ? 50 : config_.tracking.min_inliers;
 }
 
 bool Tracking::checkMovingObjects(Frame& frame) {
   bool any_parked = false;
   std::vector<bool> consistent;
-  for (const ObjectMotionVerdict& verdict : checkObjectMotion(frame, &consistent)) {
+  std::vector<ObjectMotionVerdict> verdicts = checkObjectMotion(frame, &consistent);
+  // A verdict that would leave the frame too few matches to stay tracked is
+  // not trusted: the pose it rests on came from too little of the view (an
+  // object filling the frame, as fr3_teddy's bear). The boxes stay undecided
+  // and their points are kept.
+  int left = 0;
+  for (size_t i = 0; i < frame.size(); ++i) {
+    const MapPoint* point = frame.map_points[i];
+    if (point && !frame.outlier[i] && !onMovingObject(frame.labels[i]) && point->observationCount() > 0) ++left;
+  }
+  if (left < inliersNeeded(frame)) {
+    for (ObjectMotionVerdict& verdict : verdicts)
+      if (verdict.motion == ObjectMotion::Moving) verdict.motion = ObjectMotion::Unchecked;
+    for (FeatureLabel& label : frame.labels)
+      if (label.motion == ObjectMotion::Moving) label.motion = ObjectMotion::Unchecked;
+  }
+  for (const ObjectMotionVerdict& verdict : verdicts) {
     ++moving_object_stats_.boxes_checked;
     if (verdict.motion == ObjectMotion::Parked) {
       ++moving_object_stats_.parked;

@@ -139,6 +139,7 @@ class Tracking {
   // Judges the frame's movable-class boxes under its pose, drops and retires
   // what is on moving ones; true when a parked one's points should join the pose.
   bool checkMovingObjects(Frame& frame);
+  int inliersNeeded(const Frame& frame) const;  // matches a frame needs to count as tracked
   void createKeyFrame(Frame& frame);
   void resetMap();
   // The last frame's pose again from its reference keyframe (following culled

@@ -1,4 +1,6 @@
 #include <fstream>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -188,6 +190,23 @@ TEST(Config, OrbSlam2SettingsOpenCvCannotParseIsANamedError) {
   EXPECT_NE(errorOf(path).find(path + ": cannot parse ORB-SLAM settings file"), std::string::npos) << errorOf(path);
 }
 
+// A camera section and nothing else: 7 lines, so a section after it starts on line 8.
+const std::string kMinimalCamera = "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: 500\n  cx: 320\n  cy: 240\n";
+
+// Each of `values` for `section`.`key` (the only key after kMinimalCamera) must
+// be refused with an InputError naming bad.yaml, the key's line (9) and the key.
+void expectRefused(const std::string& section, const std::string& key, const std::vector<std::string>& values) {
+  for (const std::string& bad : values) {
+    try {
+      parseConfig(kMinimalCamera + section + ":\n  " + key + ": " + bad + "\n", "bad.yaml");
+      ADD_FAILURE() << "accepted " << section << "." << key << " " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.yaml:9:"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(section + "." + key), std::string::npos) << e.what();
+    }
+  }
+}
+
 // Found by the config fuzz target: a list at the top level made FileStorage's
 // lookup throw a cv::Exception (an assertion) past the reader.
 TEST(Config, OrbSlam2SettingsThatAreAListAreANamedError) {
@@ -197,7 +216,7 @@ TEST(Config, OrbSlam2SettingsThatAreAListAreANamedError) {
 
 // Issue 15: when the detector runs, read from the config and checked with the line.
 TEST(Config, DetectEveryIsReadAndCheckedWithItsLine) {
-  const std::string camera = "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: 500\n  cx: 320\n  cy: 240\n";
+  const std::string camera = kMinimalCamera;
   Config config = parseConfig(camera + "detector:\n  detect_every: 5\n  max_box_age: 7\n  dnn_threads: 1\n  box_filter: reuse\n",
                               "five.yaml");
   EXPECT_EQ(config.detector.detect_every.mode, DetectEvery::Mode::Frames);
@@ -211,21 +230,13 @@ TEST(Config, DetectEveryIsReadAndCheckedWithItsLine) {
   EXPECT_EQ(config.detector.detect_every.mode, DetectEvery::Mode::Auto);
   EXPECT_EQ(toString(config.detector.detect_every), "auto");
 
-  for (const std::string bad : {"0", "-2", "sometimes", "2.5", "1x"}) {
-    try {
-      parseConfig(camera + "detector:\n  detect_every: " + bad + "\n", "bad.yaml");
-      ADD_FAILURE() << "accepted detect_every " << bad;
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("bad.yaml:9:"), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find("detector.detect_every"), std::string::npos) << e.what();
-    }
-  }
+  expectRefused("detector", "detect_every", {"0", "-2", "sometimes", "2.5", "1x"});
   EXPECT_THROW(parseConfig(camera + "detector:\n  box_filter: fast\n", "bad.yaml"), InputError);
   EXPECT_THROW(parseConfig(camera + "detector:\n  max_box_age: -1\n", "bad.yaml"), InputError);
 }
 
 TEST(Config, InitializerKeysAreReadAndTheWindowLevelIsCheckedWithItsLine) {
-  const std::string camera = "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: 500\n  cx: 320\n  cy: 240\n";
+  const std::string camera = kMinimalCamera;
   const Config config = parseConfig(
       camera + "initializer:\n  window_max_level: 2\n  max_translation_direction_std_deg: 3.5\n", "init.yaml");
   EXPECT_EQ(config.initializer.window_max_level, 2);
@@ -235,26 +246,9 @@ TEST(Config, InitializerKeysAreReadAndTheWindowLevelIsCheckedWithItsLine) {
   EXPECT_EQ(loadConfig(projectConfigDir() + "/kitti_00-02.yaml").initializer.window_max_level, 1);
   EXPECT_EQ(loadConfig(projectConfigDir() + "/tum_fr1.yaml").initializer.window_max_level, 0);
 
-  for (const std::string bad : {"-1", "8", "12"}) {  // 8 levels: 0 to 7
-    try {
-      parseConfig(camera + "initializer:\n  window_max_level: " + bad + "\n", "bad.yaml");
-      ADD_FAILURE() << "accepted window_max_level " << bad;
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("bad.yaml:9:"), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find("initializer.window_max_level"), std::string::npos) << e.what();
-    }
-  }
-  // A bound of 0 or less (or NaN) would refuse every motion from F.
-  for (const std::string bad : {"0", "-2", ".nan", "181"}) {
-    try {
-      parseConfig(camera + "initializer:\n  max_translation_direction_std_deg: " + bad + "\n", "bad.yaml");
-      ADD_FAILURE() << "accepted max_translation_direction_std_deg " << bad;
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("bad.yaml:9:"), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find("initializer.max_translation_direction_std_deg"), std::string::npos)
-          << e.what();
-    }
-  }
+  expectRefused("initializer", "window_max_level", {"-1", "8", "12"});  // 8 levels: 0 to 7
+  // A bound of 0 or less would refuse every motion from F (NaN: the reader's own check).
+  expectRefused("initializer", "max_translation_direction_std_deg", {"0", "-2", ".nan", "181"});
   EXPECT_DOUBLE_EQ(
       parseConfig(camera + "initializer:\n  max_translation_direction_std_deg: 180\n", "edge.yaml")
           .initializer.max_translation_direction_std_deg,

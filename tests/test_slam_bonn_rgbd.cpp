@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "sequence_test_support.hpp"
+#include "system_test_support.hpp"
 #include "vslam/eval/ate.hpp"
 #include "vslam/slam/system.hpp"
 
@@ -22,12 +23,7 @@ std::unique_ptr<System> runRgbd(const Sequence& sequence, const DetectorParams& 
   config.sensor = SensorMode::RgbD;
   config.detector = detector;
   auto system = std::make_unique<System>(config, SystemOptions());
-  for (size_t i = 0; i < sequence.frames.size(); ++i) {
-    if (i + 1 < sequence.frames.size()) system->submitAhead(sequence.frames[i + 1].index, sequence.loadColor(i + 1));
-    const cv::Mat colour = sequence.loadColor(i);
-    system->processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, colour,
-                         sequence.loadDepthMeters(i, colour.size()));
-  }
+  test::feedFrames(*system, sequence, true);
   system->finish();
   return system;
 }

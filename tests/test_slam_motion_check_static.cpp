@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "sequence_test_support.hpp"
+#include "system_test_support.hpp"
 #include "vslam/slam/system.hpp"
 
 namespace vslam {
@@ -24,13 +25,7 @@ SystemStats runTeddy(SensorMode sensor) {
   config.sensor = sensor;
   config.detector.moving_classes = {"coco-movable"};
   System system(config, SystemOptions());
-  for (size_t i = 0; i < sequence.frames.size(); ++i) {
-    if (i + 1 < sequence.frames.size()) system.submitAhead(sequence.frames[i + 1].index, sequence.loadColor(i + 1));
-    const cv::Mat colour = sequence.loadColor(i);
-    const bool with_depth = sensor == SensorMode::RgbD && !sequence.frames[i].depth_path.empty();
-    system.processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, colour,
-                        with_depth ? sequence.loadDepthMeters(i, colour.size()) : cv::Mat());
-  }
+  test::feedFrames(system, sequence, sensor == SensorMode::RgbD);
   system.finish();
   const SystemStats stats = system.stats();
   std::cout << (sensor == SensorMode::RgbD ? "RGB-D" : "mono") << ": " << stats.frames_tracked

@@ -49,19 +49,25 @@ struct RoomRun {
 RoomRun runRoom(const RoomLoopParams& room, const std::vector<std::string>& moving_classes) {
   const std::vector<StampedPose> path = roomLoopPath(room);
   RoomLoopRenderer renderer(room);
-  std::vector<cv::Mat> images;
-  for (size_t k = 0; k < path.size(); ++k) {
-    renderer.setFrame(static_cast<int>(k));
-    images.push_back(renderer.render(path[k].T_wc));
-  }
+  auto render = [&](size_t k) {
+    renderer.setFrame(static_cast<int>(k));  // where the billboard is at frame k
+    return renderer.render(path[k].T_wc);
+  };
 
   Config config;
   config.camera = room.camera;
   config.detector.moving_classes = moving_classes;
   System system(config, SystemOptions());
-  for (size_t k = 0; k < images.size(); ++k) {
-    if (k + 1 < images.size()) system.submitAhead(static_cast<int>(k + 1), images[k + 1]);
-    system.processFrame(static_cast<int>(k), path[k].timestamp, images[k]);
+  // Each frame rendered once, the next one ahead for detection, as `vslam run` reads them.
+  cv::Mat image = render(0);
+  for (size_t k = 0; k < path.size(); ++k) {
+    cv::Mat next;
+    if (k + 1 < path.size()) {
+      next = render(k + 1);
+      system.submitAhead(static_cast<int>(k + 1), next);
+    }
+    system.processFrame(static_cast<int>(k), path[k].timestamp, image);
+    image = next;
   }
   system.finish();
   EXPECT_GE(system.stats().frames_tracked, static_cast<int>(path.size()) - 5);

@@ -136,7 +136,8 @@ Config loadVslamYaml(const std::string& text, const std::string& path) {
   reader.optional(init, "initializer", "min_triangulated", config.initializer.min_triangulated);
   reader.optional(init, "initializer", "max_translation_direction_std_deg",
                   config.initializer.max_translation_direction_std_deg);
-  // 0 or less would refuse every motion from F (NaN too): the map would never start from one.
+  // 0 or less would refuse every motion from F: the map would never start from one
+  // (a NaN the reader already refuses as not finite).
   const double direction_bound = config.initializer.max_translation_direction_std_deg;
   if (!(direction_bound > 0 && direction_bound <= 180))
     throw InputError(path, init.IsDefined() ? init.Mark().line + 1 : 0,

@@ -34,28 +34,31 @@ void labelMovableKeypoints(const std::vector<Detection>& detections, const std::
 
 void releaseBackgroundByDepth(const std::vector<Detection>& detections, Frame& frame) {
   if (frame.labels.size() != frame.size() || !frame.hasDepthImage()) return;
+  // Only keypoints labelMovableKeypoints put in a movable box, and with depth.
+  auto inBoxWithDepth = [&frame](size_t i, int detection_id) {
+    const FeatureLabel& label = frame.labels[i];
+    return label.detection_id == detection_id && label.motion == ObjectMotion::Unchecked && frame.hasDepth(i);
+  };
+  if (std::none_of(frame.labels.begin(), frame.labels.end(),
+                   [](const FeatureLabel& label) { return label.motion == ObjectMotion::Unchecked; }))
+    return;  // no movable box in this frame
+  std::vector<float> core_depths;
   for (const Detection& detection : detections) {
     const cv::Rect2f& box = detection.box;
     const float margin_x = 0.5f * (1.f - kObjectCoreFraction) * box.width;
     const float margin_y = 0.5f * (1.f - kObjectCoreFraction) * box.height;
     const cv::Rect2f core(box.x + margin_x, box.y + margin_y, kObjectCoreFraction * box.width,
                           kObjectCoreFraction * box.height);
-    std::vector<float> core_depths;
-    for (size_t i = 0; i < frame.size(); ++i) {
-      const FeatureLabel& label = frame.labels[i];
-      if (label.detection_id != detection.id || label.motion != ObjectMotion::Unchecked || !frame.hasDepth(i)) continue;
-      if (core.contains(frame.keypoints[i].pt)) core_depths.push_back(frame.depth[i]);
-    }
+    core_depths.clear();
+    for (size_t i = 0; i < frame.size(); ++i)
+      if (inBoxWithDepth(i, detection.id) && core.contains(frame.keypoints[i].pt)) core_depths.push_back(frame.depth[i]);
     if (static_cast<int>(core_depths.size()) < kMinObjectCoreDepths) continue;
     auto middle = core_depths.begin() + core_depths.size() / 2;
     std::nth_element(core_depths.begin(), middle, core_depths.end());
-    const double object_depth = *middle;
-    const double background_from = object_depth * (1.0 + kBackgroundDepthRatio) + kBackgroundDepthMargin;
-    for (size_t i = 0; i < frame.size(); ++i) {
-      FeatureLabel& label = frame.labels[i];
-      if (label.detection_id != detection.id || label.motion != ObjectMotion::Unchecked || !frame.hasDepth(i)) continue;
-      if (frame.depth[i] > background_from) label = FeatureLabel();  // not the object's: no class either
-    }
+    const double background_from = *middle * (1.0 + kBackgroundDepthRatio) + kBackgroundDepthMargin;
+    for (size_t i = 0; i < frame.size(); ++i)
+      if (inBoxWithDepth(i, detection.id) && frame.depth[i] > background_from)
+        frame.labels[i] = FeatureLabel();  // not the object's: no class either
   }
 }
 

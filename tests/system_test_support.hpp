@@ -1,0 +1,31 @@
+#pragma once
+// Feeding a sequence to a System as `vslam run` does, for the end-to-end tests
+// that run with the detector on.
+#include <opencv2/core.hpp>
+
+#include "vslam/io/sequence.hpp"
+#include "vslam/slam/system.hpp"
+
+namespace vslam::test {
+
+// Every frame of `sequence`, in order: the next colour image is submitted to
+// detection ahead while this one is tracked, each image is decoded once, and
+// with `with_depth` each frame that has a depth image gets it. Does not
+// call finish().
+inline void feedFrames(System& system, const Sequence& sequence, bool with_depth) {
+  const size_t n = sequence.frames.size();
+  cv::Mat colour = n > 0 ? sequence.loadColor(0) : cv::Mat();
+  for (size_t i = 0; i < n; ++i) {
+    cv::Mat next;
+    if (i + 1 < n) {
+      next = sequence.loadColor(i + 1);
+      system.submitAhead(sequence.frames[i + 1].index, next);
+    }
+    const bool has_depth = with_depth && !sequence.frames[i].depth_path.empty();
+    system.processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, colour,
+                        has_depth ? sequence.loadDepthMeters(i, colour.size()) : cv::Mat());
+    colour = next;
+  }
+}
+
+}  // namespace vslam::test

@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <optional>
 #include <regex>
 #include <stdexcept>
@@ -12,6 +14,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "vslam/io/depth_png.hpp"
 #include "vslam/io/image_files.hpp"
 #include "vslam/io/sequence_catalog.hpp"
 #include "vslam/io/sequence_files.hpp"
@@ -28,6 +31,12 @@ namespace fs = std::filesystem;
 constexpr double kDepthPairingMaxDifference = 0.02;
 
 bool startsWith(const std::string& text, const std::string& prefix) { return text.rfind(prefix, 0) == 0; }
+
+std::vector<std::uint8_t> readFileBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, "cannot open image file");
+  return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
 
 std::string absoluteFolder(const fs::path& path) { return fs::weakly_canonical(fs::absolute(path)).string(); }
 
@@ -336,7 +345,17 @@ cv::Mat Sequence::readImage(const std::string& path, int imread_flags, int list_
   if (!truncation.empty()) throw FrameUnreadable(path, 0, truncation + listed_at);
   cv::Mat image;
   try {
-    image = cv::imread(path, imread_flags);
+    if (imread_flags == cv::IMREAD_UNCHANGED) {
+      // Depth: 16-bit greyscale PNGs are decoded by libdeflate (depth_png.hpp),
+      // anything else by OpenCV.
+      const std::vector<std::uint8_t> bytes = readFileBytes(path);
+      image = decodeGray16Png(bytes.data(), bytes.size(), path);
+      if (image.empty()) image = cv::imdecode(bytes, imread_flags);
+    } else {
+      image = cv::imread(path, imread_flags);
+    }
+  } catch (const InputError& e) {
+    throw FrameUnreadable(e.what() + listed_at);
   } catch (const cv::Exception& e) {
     throw FrameUnreadable(path, 0, "cannot decode image: " + e.msg + listed_at);
   }

@@ -13,6 +13,7 @@
 #include "vslam/core/config.hpp"
 #include "vslam/core/error.hpp"
 #include "vslam/detect/darknet_weights.hpp"
+#include "vslam/io/depth_png.hpp"
 #include "vslam/io/ply.hpp"
 #include "vslam/io/sequence_files.hpp"
 #include "vslam/io/text_table.hpp"
@@ -119,6 +120,7 @@ const std::vector<FuzzTarget>& fuzzTargets() {
       {"darknet_cfg", fuzzDarknetCfg},
       {"darknet_weights", fuzzDarknetWeights},
       {"ply", fuzzPly},
+      {"depth_png", fuzzDepthPng},
       {"bundle_problem", fuzzBundleProblem},
       {"map_file", fuzzMapFile},
   };
@@ -215,6 +217,13 @@ bool fuzzPly(const std::uint8_t* data, std::size_t size) {
   return accepts([&] {
     std::istringstream in(bytesOf(data, size), std::ios::in | std::ios::binary);
     readMapPly(in, "map.ply");
+  });
+}
+
+bool fuzzDepthPng(const std::uint8_t* data, std::size_t size) {
+  return accepts([&] {
+    const cv::Mat image = decodeGray16Png(data, size, "depth.png");
+    if (!image.empty() && image.type() != CV_16UC1) throw std::logic_error("decodeGray16Png: not CV_16UC1");
   });
 }
 

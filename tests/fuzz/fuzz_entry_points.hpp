@@ -38,6 +38,7 @@ bool fuzzDarknetCfg(const std::uint8_t* data, std::size_t size);  // a .cfg, the
 // The first bytes of a .weights file, checked against a small fixed cfg for a file of `size` bytes.
 bool fuzzDarknetWeights(const std::uint8_t* data, std::size_t size);
 bool fuzzPly(const std::uint8_t* data, std::size_t size);            // map.ply
+bool fuzzDepthPng(const std::uint8_t* data, std::size_t size);        // a depth image (16-bit PNG)
 bool fuzzBundleProblem(const std::uint8_t* data, std::size_t size);  // a recorded bundle problem
 // A saved map (SQLite), through a temporary file: what `vslam map info` and
 // `vslam run --load-map` read (header, counts, compatibility, the whole map).

@@ -1,6 +1,9 @@
 #pragma once
 // Feeding a sequence to a System as `vslam run` does, for the end-to-end tests
 // that run with the detector on.
+#include <algorithm>
+#include <limits>
+
 #include <opencv2/core.hpp>
 
 #include "vslam/io/sequence.hpp"
@@ -8,12 +11,13 @@
 
 namespace vslam::test {
 
-// Every frame of `sequence`, in order: the next colour image is submitted to
-// detection ahead while this one is tracked, each image is decoded once, and
-// with `with_depth` each frame that has a depth image gets it. Does not
-// call finish().
-inline void feedFrames(System& system, const Sequence& sequence, bool with_depth) {
-  const size_t n = sequence.frames.size();
+// The first `count` frames of `sequence` (all by default), in order: the next
+// colour image is submitted to detection ahead while this one is tracked, each
+// image is decoded once, and with `with_depth` each frame that has a depth
+// image gets it. Does not call finish().
+inline void feedFrames(System& system, const Sequence& sequence, bool with_depth,
+                       size_t count = std::numeric_limits<size_t>::max()) {
+  const size_t n = std::min(count, sequence.frames.size());
   cv::Mat colour = n > 0 ? sequence.loadColor(0) : cv::Mat();
   for (size_t i = 0; i < n; ++i) {
     cv::Mat next;

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "system_test_support.hpp"
 #include "test_support.hpp"
 #include "vslam/detect/detector.hpp"
 #include "vslam/eval/ate.hpp"
@@ -328,16 +329,7 @@ SemanticRun runFirstFrames(const Sequence& sequence, const DetectorParams& detec
   SystemOptions options;
   options.deterministic = true;
   System system(config, options);
-  cv::Mat image = sequence.loadColor(0);
-  for (size_t i = 0; i < count; ++i) {
-    cv::Mat next;
-    if (i + 1 < count) {
-      next = sequence.loadColor(i + 1);
-      system.submitAhead(sequence.frames[i + 1].index, next);
-    }
-    system.processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, image);
-    image = next;
-  }
+  test::feedFrames(system, sequence, false, count);
   system.finish();
   return {system.frameTrajectory(), system.mapPoints(), system.objectMap(), system.detectionSummary()};
 }

@@ -54,6 +54,20 @@ struct TrackedPose {
   }
 };
 
+// The matches that keep a frame tracked: inliers on points already in the
+// map (a point just made by this frame's odometry has no observation yet),
+// optionally without those on objects judged moving.
+int mapInliers(const Frame& frame, bool skip_moving_objects) {
+  int count = 0;
+  for (size_t i = 0; i < frame.size(); ++i) {
+    const MapPoint* point = frame.map_points[i];
+    if (!point || frame.outlier[i] || point->observationCount() == 0) continue;
+    if (skip_moving_objects && onMovingObject(frame.labels[i])) continue;
+    ++count;
+  }
+  return count;
+}
+
 }  // namespace
 
 bool motionModelAllowed(long frame_id, long last_relocalisation) {
@@ -713,13 +727,10 @@ bool Tracking::trackLocalMap(Frame& frame) {
   optimisePose(frame);
   if (frame.labels.size() == frame.size() && checkMovingObjects(frame)) optimisePose(frame);
 
-  matches_inliers_ = 0;
-  for (size_t i = 0; i < frame.size(); ++i) {
-    MapPoint* point = frame.map_points[i];
-    if (!point || frame.outlier[i]) continue;
-    if (!localization_only_) point->increaseFound();
-    if (point->observationCount() > 0) ++matches_inliers_;
-  }
+  if (!localization_only_)
+    for (size_t i = 0; i < frame.size(); ++i)
+      if (frame.map_points[i] && !frame.outlier[i]) frame.map_points[i]->increaseFound();
+  matches_inliers_ = mapInliers(frame, false);
   return matches_inliers_ >= inliersNeeded(frame);
 }
 
@@ -738,12 +749,7 @@ bool Tracking::checkMovingObjects(Frame& frame) {
   // not trusted: the pose it rests on came from too little of the view (an
   // object filling the frame, as fr3_teddy's bear). The boxes stay undecided
   // and their points are kept.
-  int left = 0;
-  for (size_t i = 0; i < frame.size(); ++i) {
-    const MapPoint* point = frame.map_points[i];
-    if (point && !frame.outlier[i] && !onMovingObject(frame.labels[i]) && point->observationCount() > 0) ++left;
-  }
-  if (left < inliersNeeded(frame)) {
+  if (mapInliers(frame, true) < inliersNeeded(frame)) {
     for (ObjectMotionVerdict& verdict : verdicts)
       if (verdict.motion == ObjectMotion::Moving) verdict.motion = ObjectMotion::Unchecked;
     for (FeatureLabel& label : frame.labels)

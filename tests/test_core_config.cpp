@@ -232,6 +232,7 @@ TEST(Config, DetectEveryIsReadAndCheckedWithItsLine) {
 
   expectRefused("detector", "detect_every", {"0", "-2", "sometimes", "2.5", "1x"});
   EXPECT_THROW(parseConfig(camera + "detector:\n  box_filter: fast\n", "bad.yaml"), InputError);
+  EXPECT_EQ(parseConfig(camera + "detector:\n  box_filter: label\n", "label.yaml").detector.box_filter, "label");
   EXPECT_THROW(parseConfig(camera + "detector:\n  max_box_age: -1\n", "bad.yaml"), InputError);
 }
 

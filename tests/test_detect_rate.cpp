@@ -20,7 +20,7 @@ TEST(DetectRate, BadOptionValuesAreOneLineInputErrors) {
   } cases[] = {
       {"--detect-every 0", "error: --detect-every: expected a whole number >= 1, 'keyframes' or 'auto', not '0'"},
       {"--detect-every often", "error: --detect-every: expected a whole number >= 1, 'keyframes' or 'auto', not 'often'"},
-      {"--box-filter fast", "error: --box-filter: expected 'paper' or 'reuse', not 'fast'"},
+      {"--box-filter fast", "error: --box-filter: expected 'paper', 'reuse' or 'label', not 'fast'"},
       {"--max-box-age -3", "error: --max-box-age: must be >= 0, not -3"},
       {"--dnn-threads -1", "error: --dnn-threads: must be >= 0, not -1"},
   };

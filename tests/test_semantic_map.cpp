@@ -314,6 +314,42 @@ TEST(FrameBuilderFilter, AddsLabelledKeypointsOrRemovesDynamicOnes) {
     EXPECT_FALSE(box.contains(cv::Point(static_cast<int>(keypoint.pt.x), static_cast<int>(keypoint.pt.y))));
 }
 
+// --box-filter label: no keypoint is added, so the frame is the detector-off
+// frame keypoint for keypoint, and those inside the box carry its class.
+TEST(FrameBuilderFilter, LabelFilterKeepsTheDetectorOffKeypointsAndLabelsThoseInTheBox) {
+  const Sequence sequence = fr1Xyz();
+  const cv::Mat image = sequence.loadColor(0);
+  Config config = sequence.config;
+  config.detector.box_filter = "label";
+  Detection keyboard;
+  keyboard.id = 0;
+  keyboard.class_id = 66;
+  keyboard.class_name = "keyboard";
+  keyboard.confidence = 0.99f;
+  keyboard.box = cv::Rect2f(326, 331, 270, 139);
+  const std::vector<Detection> detections = {keyboard};
+  const cv::Rect box = cv::Rect(326, 331, 270, 139) & cv::Rect(0, 0, image.cols, image.rows);
+
+  const FrameBuilder builder(config, config.camera);
+  const Frame plain = builder.build(0, 0, 0.0, image);
+  FrameFilterResult filter;
+  const Frame labelled = builder.build(0, 0, 0.0, image, cv::Mat(), -1, &detections, &filter);
+  EXPECT_EQ(filter.stats.boxes_used, 1);
+  EXPECT_EQ(filter.stats.keypoints_added, 0);
+  ASSERT_EQ(labelled.size(), plain.size());
+  EXPECT_EQ(cv::norm(labelled.descriptors, plain.descriptors, cv::NORM_HAMMING), 0);
+  ASSERT_EQ(labelled.labels.size(), labelled.size());
+  int in_box_count = 0;
+  for (size_t i = 0; i < labelled.size(); ++i) {
+    EXPECT_EQ(labelled.keypoints[i].pt, plain.keypoints[i].pt) << i;
+    const bool in_box =
+        box.contains(cv::Point(static_cast<int>(labelled.keypoints[i].pt.x), static_cast<int>(labelled.keypoints[i].pt.y)));
+    EXPECT_EQ(labelled.labels[i].class_id, in_box ? 66 : -1) << i;
+    in_box_count += in_box;
+  }
+  EXPECT_GT(in_box_count, 20);
+}
+
 struct SemanticRun {
   std::vector<StampedPose> frames;
   std::vector<ExportedMapPoint> points;

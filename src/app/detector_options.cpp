@@ -33,7 +33,7 @@ void addDetectorOptions(CLI::App& command, DetectorOptions& options) {
                      "OpenCV threads while a detector is loaded (cv::setNumThreads; default 1); 0: OpenCV's default");
   command.add_option("--box-filter", options.box_filter,
                      "paper: ORB again inside each box (Algorithm 1); reuse: only the frame's own FAST corners its "
-                     "quota dropped");
+                     "quota dropped; label: no keypoint added, the frame's own keypoints in a box take its class");
 }
 
 void applyDetectorOptions(const DetectorOptions& options, DetectorParams& params) {
@@ -65,8 +65,8 @@ void applyDetectorOptions(const DetectorOptions& options, DetectorParams& params
     params.dnn_threads = *options.dnn_threads;
   }
   if (options.box_filter) {
-    if (*options.box_filter != "paper" && *options.box_filter != "reuse")
-      throw InputError("--box-filter: expected 'paper' or 'reuse', not '" + *options.box_filter + "'");
+    if (!isBoxFilter(*options.box_filter))
+      throw InputError("--box-filter: expected 'paper', 'reuse' or 'label', not '" + *options.box_filter + "'");
     params.box_filter = *options.box_filter;
   }
 }

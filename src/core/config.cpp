@@ -198,8 +198,9 @@ Config loadVslamYaml(const std::string& text, const std::string& path) {
   reader.optional(det, "detector", "box_filter", d.box_filter);
   if (d.max_box_age < 0 || d.dnn_threads < 0)
     throw InputError(path, det.Mark().line + 1, "detector.max_box_age and detector.dnn_threads must be >= 0");
-  if (d.box_filter != "paper" && d.box_filter != "reuse")
-    throw InputError(path, det.Mark().line + 1, "detector.box_filter must be 'paper' or 'reuse', not '" + d.box_filter + "'");
+  if (!isBoxFilter(d.box_filter))
+    throw InputError(path, det.Mark().line + 1,
+                     "detector.box_filter must be 'paper', 'reuse' or 'label', not '" + d.box_filter + "'");
   return config;
 }
 

@@ -90,9 +90,12 @@ Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& b
     // Per box: the configured count (or the frame's), on the same pyramid, as Algorithm 1 asks.
     const int per_box = featuresPerBox(config_.detector, config_.orb);
     int reused = 0;
-    const BoxExtractor extract_in_box = reuse_corners
-                                            ? cornerBoxExtractor(extractor_, image_pyramid, corners, per_box, &reused)
-                                            : orbBoxExtractor(extractor_, image_pyramid, per_box);
+    const BoxExtractor label_only = [](const cv::Rect&, std::vector<cv::KeyPoint>&, cv::Mat&) {};
+    const BoxExtractor extract_in_box =
+        config_.detector.box_filter == "label"
+            ? label_only
+            : (reuse_corners ? cornerBoxExtractor(extractor_, image_pyramid, corners, per_box, &reused)
+                             : orbBoxExtractor(extractor_, image_pyramid, per_box));
     std::vector<KeypointLabel> labels;
     const KeypointFilterStats stats =
         applyKeypointFilter(gray.size(), detections, config_.detector.min_box_px, dynamic_class_ids_, extract_in_box,

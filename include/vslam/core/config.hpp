@@ -118,9 +118,13 @@ struct DetectorParams {
   int dnn_threads = 1;
   // How boxes add keypoints: "paper" runs ORB again inside each box (Algorithm
   // 1); "reuse" takes the frame's own FAST corners and describes only the ones
-  // the frame's quota dropped (issue 15).
+  // the frame's quota dropped (issue 15); "label" adds none: the frame's own
+  // keypoints inside a box take its class, so tracking sees exactly the
+  // keypoints of a detector-off run.
   std::string box_filter = "paper";
 };
+
+inline bool isBoxFilter(const std::string& name) { return name == "paper" || name == "reuse" || name == "label"; }
 
 // What the run feeds the pipeline: colour alone, or colour with registered
 // depth (ORB-SLAM2's RGB-D system). Chosen by `vslam run --mode`, not by the file.

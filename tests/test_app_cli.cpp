@@ -122,14 +122,16 @@ TEST(CliRun, HelpListsEveryOptionAndItsDefault) {
   const Outcome help = vslam("run --help");
   EXPECT_EQ(help.exit_code, 0);
   for (const char* option : {"--seq", "--config", "--data-root", "--mode", "--out", "--detector", "--deterministic", "--realtime",
-                             "--no-fetch", "--max-frames", "--info", "=mono", "INT:NONNEGATIVE=0", "default: the config's"})
+                             "--no-fetch", "--max-frames", "--info", "=mono", "INT:NONNEGATIVE=0", "default: the config's",
+                             "'auto' (whenever the detection thread is free, never waited for; the default, but 1 with --moving-classes",
+                             "label (the default)"})
     EXPECT_TRUE(contains(help.out, option)) << option << "\n" << help.out;
 }
 
 TEST(CliRun, DetectorWritesObjectsAndReport) {
   const fs::path out = test::scratchDir("cli_run_detector");
   const Outcome run =
-      vslam("run --seq tum/fr1_xyz --max-frames 40 --deterministic --box-features 200 --out " + quoted(out.string()));
+      vslam("run --seq tum/fr1_xyz --max-frames 40 --deterministic --detect-every 1 --box-filter paper --box-features 200 --out " + quoted(out.string()));
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_TRUE(contains(run.out, "detector: yolo-fastest-1.1-xl")) << run.out;
   const nlohmann::json report = nlohmann::json::parse(slurp(out / "report.json"));

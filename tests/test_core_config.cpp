@@ -219,16 +219,16 @@ TEST(Config, DetectEveryIsReadAndCheckedWithItsLine) {
   const std::string camera = kMinimalCamera;
   Config config = parseConfig(camera + "detector:\n  detect_every: 5\n  max_box_age: 7\n  dnn_threads: 1\n  box_filter: reuse\n",
                               "five.yaml");
-  EXPECT_EQ(config.detector.detect_every.mode, DetectEvery::Mode::Frames);
-  EXPECT_EQ(config.detector.detect_every.frames, 5);
+  EXPECT_EQ(config.detector.detect_every->mode, DetectEvery::Mode::Frames);
+  EXPECT_EQ(config.detector.detect_every->frames, 5);
   EXPECT_EQ(config.detector.max_box_age, 7);
   EXPECT_EQ(config.detector.dnn_threads, 1);
   EXPECT_EQ(config.detector.box_filter, "reuse");
   config = parseConfig(camera + "detector:\n  detect_every: keyframes\n", "kf.yaml");
-  EXPECT_EQ(config.detector.detect_every.mode, DetectEvery::Mode::KeyFrames);
+  EXPECT_EQ(config.detector.detect_every->mode, DetectEvery::Mode::KeyFrames);
   config = parseConfig(camera + "detector:\n  detect_every: auto\n", "auto.yaml");
-  EXPECT_EQ(config.detector.detect_every.mode, DetectEvery::Mode::Auto);
-  EXPECT_EQ(toString(config.detector.detect_every), "auto");
+  EXPECT_EQ(config.detector.detect_every->mode, DetectEvery::Mode::Auto);
+  EXPECT_EQ(toString(*config.detector.detect_every), "auto");
 
   expectRefused("detector", "detect_every", {"0", "-2", "sometimes", "2.5", "1x"});
   EXPECT_THROW(parseConfig(camera + "detector:\n  box_filter: fast\n", "bad.yaml"), InputError);

@@ -132,12 +132,13 @@ TEST(DetectionStage, NoneGivesNoStage) {
 TEST(DetectionStage, ResolvesDynamicClassesAndDetectsAhead) {
   DetectorParams params;
   params.dynamic_classes = {"person", "chair"};
+  params.detect_every = *parseDetectEvery("1");
   const auto stage = makeDetectionStage(params);
   ASSERT_NE(stage, nullptr);
   EXPECT_EQ(stage->dynamicClassIds(), (std::vector<int>{0, 56}));
   EXPECT_EQ(stage->classNames().size(), 80u);
   const cv::Mat dog = test::dogImage();
-  // Every frame (the default): both submitted ahead, each frame gets its own three boxes, fresh.
+  // Every frame: both submitted ahead, each frame gets its own three boxes, fresh.
   stage->submitAhead(0, dog);
   stage->submitAhead(1, dog);
   FeatureSnapshot frame;

@@ -280,6 +280,7 @@ TEST(FrameBuilderFilter, AddsLabelledKeypointsOrRemovesDynamicOnes) {
   const Sequence sequence = fr1Xyz();
   const cv::Mat image = sequence.loadColor(0);
   Config config = sequence.config;
+  config.detector.box_filter = "paper";
   Detection keyboard;
   keyboard.id = 0;
   keyboard.class_id = 66;
@@ -374,12 +375,16 @@ int countClass(const std::vector<ExportedMapPoint>& points, int class_id) {
   return static_cast<int>(std::count_if(points.begin(), points.end(), [&](const auto& p) { return p.class_id == class_id; }));
 }
 
-TEST(SemanticSlam, DetectorAddsKeypointsAndLabelsTheMap) {
+// The paper's behaviour (--detect-every 1 --box-filter paper): every frame
+// detected, ORB run again inside each box and appended.
+TEST(SemanticSlam, PaperFilterAddsKeypointsAndLabelsTheMap) {
   const Sequence sequence = fr1Xyz();
   const std::vector<std::string> names = cocoNames();
   const int keyboard = static_cast<int>(std::find(names.begin(), names.end(), "keyboard") - names.begin());
   DetectorParams detector = sequence.config.detector;
   ASSERT_EQ(detector.model, "yolo-fastest-1.1-xl");
+  detector.detect_every = *parseDetectEvery("1");
+  detector.box_filter = "paper";
   const SemanticRun run = runFirstFrames(sequence, detector, 60);
 
   ASSERT_TRUE(run.detection.enabled);
@@ -407,6 +412,43 @@ TEST(SemanticSlam, DetectorAddsKeypointsAndLabelsTheMap) {
     EXPECT_GT(object.confidence, 0.5);
     EXPECT_LE(object.confidence, 1.0);
   }
+}
+
+// The default detector (--detect-every auto --box-filter label; deterministic
+// runs detect each keyframe) adds no keypoint, so tracking is the detector-off
+// run's to the digit, while the map's points and objects still carry classes.
+TEST(SemanticSlam, DefaultDetectorTracksAsDetectorOffAndLabelsTheMap) {
+  const Sequence sequence = fr1Xyz();
+  const std::vector<std::string> names = cocoNames();
+  const int keyboard = static_cast<int>(std::find(names.begin(), names.end(), "keyboard") - names.begin());
+  DetectorParams defaults;
+  EXPECT_EQ(detectEvery(defaults).mode, DetectEvery::Mode::Auto);
+  EXPECT_EQ(defaults.box_filter, "label");
+  // A motion check needs fresh boxes: every frame, unless a rate is asked for.
+  defaults.moving_classes = {"person"};
+  EXPECT_EQ(detectEvery(defaults).mode, DetectEvery::Mode::Frames);
+  EXPECT_EQ(detectEvery(defaults).frames, 1);
+  defaults.detect_every = *parseDetectEvery("keyframes");
+  EXPECT_EQ(detectEvery(defaults).mode, DetectEvery::Mode::KeyFrames);
+  DetectorParams off = sequence.config.detector;
+  off.model = "none";
+  const SemanticRun plain = runFirstFrames(sequence, off, 60);
+  const SemanticRun run = runFirstFrames(sequence, sequence.config.detector, 60);
+
+  ASSERT_TRUE(run.detection.enabled);
+  EXPECT_EQ(run.detection.detect_every, "auto");
+  EXPECT_EQ(run.detection.box_filter, "label");
+  EXPECT_EQ(run.detection.keypoints_added_total, 0);
+  EXPECT_GE(run.detection.network_frames, 2);
+  EXPECT_LT(run.detection.network_frames, 60);
+  ASSERT_EQ(run.frames.size(), plain.frames.size());
+  for (size_t i = 0; i < run.frames.size(); ++i) {
+    EXPECT_EQ(run.frames[i].timestamp, plain.frames[i].timestamp) << i;
+    EXPECT_EQ(run.frames[i].T_wc.matrix(), plain.frames[i].T_wc.matrix()) << i;
+  }
+  EXPECT_GT(countClass(run.points, keyboard), 30);
+  EXPECT_TRUE(std::any_of(run.objects.begin(), run.objects.end(),
+                          [](const ObjectLandmark& o) { return o.class_name == "keyboard"; }));
 }
 
 // The first 400 frames of fr1_xyz, deterministic (about 25 s on 2 cores). The

@@ -27,13 +27,14 @@ void addDetectorOptions(CLI::App& command, DetectorOptions& options) {
       ->delimiter(',');
   command.add_option("--detect-every", options.detect_every,
                      "Frames the network sees: N (every N-th frame; 1 = every frame, the paper), 'keyframes' or 'auto' "
-                     "(whenever the detection thread is free, never waited for); boxes are carried in between");
+                     "(whenever the detection thread is free, never waited for; the default, but 1 with --moving-classes or "
+                     "--dynamic-classes); boxes are carried in between");
   command.add_option("--max-box-age", options.max_box_age, "Frames a carried box lives after its detection (default 30)");
   command.add_option("--dnn-threads", options.dnn_threads,
                      "OpenCV threads while a detector is loaded (cv::setNumThreads; default 1); 0: OpenCV's default");
   command.add_option("--box-filter", options.box_filter,
                      "paper: ORB again inside each box (Algorithm 1); reuse: only the frame's own FAST corners its "
-                     "quota dropped; label: no keypoint added, the frame's own keypoints in a box take its class");
+                     "quota dropped; label (the default): no keypoint added, the frame's own keypoints in a box take its class");
 }
 
 void applyDetectorOptions(const DetectorOptions& options, DetectorParams& params) {

@@ -22,6 +22,7 @@ BoxCarrierParams carrierParams(const DetectorParams& params) {
 
 DetectionStage::DetectionStage(const DetectorParams& params, StageTimer* timer, bool deterministic)
     : params_(params),
+      every_(vslam::detectEvery(params)),
       deterministic_(deterministic),
       detector_(std::make_unique<YoloDetector>(params, locateModel(params))),
       carrier_(carrierParams(params)) {
@@ -48,7 +49,7 @@ DetectionStage::~DetectionStage() {
 }
 
 bool DetectionStage::isTurn(int frame_index) const {
-  return params_.detect_every.mode == DetectEvery::Mode::Frames && frame_index % params_.detect_every.frames == 0;
+  return every_.mode == DetectEvery::Mode::Frames && frame_index % every_.frames == 0;
 }
 
 void DetectionStage::submitAhead(int frame_index, const cv::Mat& bgr) {
@@ -63,11 +64,11 @@ void DetectionStage::submitWithSnapshot(const FeatureSnapshot& frame, const cv::
 }
 
 std::vector<Detection> DetectionStage::boxesFor(const FeatureSnapshot& frame, const cv::Mat& bgr) {
-  if (params_.detect_every.mode == DetectEvery::Mode::Frames) {
+  if (every_.mode == DetectEvery::Mode::Frames) {
     if (isTurn(frame.frame_index)) {
       if (!async_->pending(frame.frame_index)) async_->submit(frame.frame_index, bgr);
       const std::vector<Detection> detections = async_->wait(frame.frame_index);
-      if (params_.detect_every.frames > 1) {
+      if (every_.frames > 1) {
         // Carry the old boxes here too, only to measure them against the new ones.
         carrier_.advance(frame);
         for (const Detection& fresh : detections) {
@@ -117,7 +118,7 @@ std::vector<Detection> DetectionStage::boxesFor(const FeatureSnapshot& frame, co
 }
 
 void DetectionStage::afterTrack(const FeatureSnapshot& frame, const cv::Mat& bgr, bool made_keyframe) {
-  const DetectEvery::Mode mode = params_.detect_every.mode;
+  const DetectEvery::Mode mode = every_.mode;
   if (mode == DetectEvery::Mode::Frames) return;
   if (mode == DetectEvery::Mode::KeyFrames || deterministic_) {
     if (made_keyframe) submitWithSnapshot(frame, bgr);

@@ -250,7 +250,7 @@ DetectionSummary System::detectionSummary() const {
   summary.frames = static_cast<int>(keypoints_added_.size());
   summary.median_ms = percentile(timer_.samples("detect"), 0.5);
   summary.wait_median_ms = percentile(timer_.samples("detect_wait"), 0.5);
-  summary.detect_every = toString(detection_->params().detect_every);
+  summary.detect_every = toString(detection_->detectEvery());
   summary.box_filter = detection_->params().box_filter;
   const DetectionScheduleStats schedule = detection_->scheduleStats();
   summary.network_frames = schedule.network_frames;

@@ -106,7 +106,9 @@ struct DetectorParams {
   // instance's keypoints and map points are kept out of tracking and mapping,
   // a parked one stays. "coco-movable" stands for COCO's movable classes.
   std::vector<std::string> moving_classes;
-  DetectEvery detect_every;  // config key detector.detect_every: 1, N, keyframes or auto
+  // Config key detector.detect_every: 1, N, keyframes or auto. Unset, it is
+  // resolved by detectEvery() below.
+  std::optional<DetectEvery> detect_every;
   // Frames a box lives after the network saw it; older carried boxes expire.
   // 30 (1 s at 30 Hz) outlives fr1_xyz's keyframe spacing (~19 frames), so
   // --detect-every keyframes still labels the next keyframe.
@@ -120,9 +122,24 @@ struct DetectorParams {
   // 1); "reuse" takes the frame's own FAST corners and describes only the ones
   // the frame's quota dropped (issue 15); "label" adds none: the frame's own
   // keypoints inside a box take its class, so tracking sees exactly the
-  // keypoints of a detector-off run.
-  std::string box_filter = "paper";
+  // keypoints of a detector-off run. "label" is the default: it is the one
+  // detector-on setting measured no worse than detector off on every shared
+  // sequence (docs/BENCHMARKS.md, "Labels only"); the paper's added keypoints
+  // cost accuracy on static scenes and on walking people.
+  std::string box_filter = "label";
 };
+
+// The rate a run detects at. Unset: auto, so the network never holds Tracking
+// up (issue 15); but every frame when boxes are checked for motion or their
+// keypoints removed, since a box carried by its keypoints lags a walking
+// person (Bonn crowd RGB-D with --moving-classes person, docs/BENCHMARKS.md,
+// "Labels only").
+inline DetectEvery detectEvery(const DetectorParams& params) {
+  if (params.detect_every) return *params.detect_every;
+  DetectEvery every;
+  if (params.moving_classes.empty() && params.dynamic_classes.empty()) every.mode = DetectEvery::Mode::Auto;
+  return every;
+}
 
 inline bool isBoxFilter(const std::string& name) { return name == "paper" || name == "reuse" || name == "label"; }
 

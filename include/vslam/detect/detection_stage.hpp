@@ -66,6 +66,7 @@ class DetectionStage {
   void afterTrack(const FeatureSnapshot& frame, const cv::Mat& bgr, bool made_keyframe);
 
   const DetectorParams& params() const { return params_; }
+  const DetectEvery& detectEvery() const { return every_; }  // the rate in force, resolved
   const ModelFiles& files() const { return detector_->files(); }
   const std::vector<std::string>& classNames() const { return detector_->classNames(); }
   const std::vector<int>& dynamicClassIds() const { return dynamic_class_ids_; }
@@ -78,6 +79,7 @@ class DetectionStage {
   void submitWithSnapshot(const FeatureSnapshot& frame, const cv::Mat& bgr);
 
   DetectorParams params_;
+  DetectEvery every_;
   bool deterministic_;
   std::unique_ptr<YoloDetector> detector_;
   std::vector<int> dynamic_class_ids_;

@@ -103,7 +103,7 @@ struct DetectionSummary {
   long keypoints_added_total = 0;
   // Issue 15: which frames the network saw and how the others got their boxes.
   std::string detect_every;   // "1", "N", "keyframes" or "auto"
-  std::string box_filter;     // "paper" or "reuse"
+  std::string box_filter;     // "paper", "reuse" or "label"
   int network_frames = 0;     // detections used (one network run each)
   int fresh_frames = 0;       // frames with a box of their own detection
   int carried_frames = 0;     // frames with only carried boxes, or none

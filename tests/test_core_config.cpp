@@ -214,6 +214,22 @@ TEST(Config, OrbSlam2SettingsThatAreAListAreANamedError) {
   EXPECT_NE(errorOf(path).find(path + ": expected a mapping of keys"), std::string::npos) << errorOf(path);
 }
 
+// Issue 15: auto and labels only by default; a motion check needs fresh boxes,
+// so every frame then, unless a rate is asked for.
+TEST(Config, DetectorDefaultsToAutoAndLabelsButEveryFrameForMotionChecks) {
+  DetectorParams defaults;
+  EXPECT_EQ(detectEvery(defaults).mode, DetectEvery::Mode::Auto);
+  EXPECT_EQ(defaults.box_filter, "label");
+  defaults.moving_classes = {"person"};
+  EXPECT_EQ(detectEvery(defaults).mode, DetectEvery::Mode::Frames);
+  EXPECT_EQ(detectEvery(defaults).frames, 1);
+  defaults.moving_classes.clear();
+  defaults.dynamic_classes = {"person"};
+  EXPECT_EQ(detectEvery(defaults).mode, DetectEvery::Mode::Frames);
+  defaults.detect_every = *parseDetectEvery("keyframes");
+  EXPECT_EQ(detectEvery(defaults).mode, DetectEvery::Mode::KeyFrames);
+}
+
 // Issue 15: when the detector runs, read from the config and checked with the line.
 TEST(Config, DetectEveryIsReadAndCheckedWithItsLine) {
   const std::string camera = kMinimalCamera;

@@ -421,15 +421,6 @@ TEST(SemanticSlam, DefaultDetectorTracksAsDetectorOffAndLabelsTheMap) {
   const Sequence sequence = fr1Xyz();
   const std::vector<std::string> names = cocoNames();
   const int keyboard = static_cast<int>(std::find(names.begin(), names.end(), "keyboard") - names.begin());
-  DetectorParams defaults;
-  EXPECT_EQ(detectEvery(defaults).mode, DetectEvery::Mode::Auto);
-  EXPECT_EQ(defaults.box_filter, "label");
-  // A motion check needs fresh boxes: every frame, unless a rate is asked for.
-  defaults.moving_classes = {"person"};
-  EXPECT_EQ(detectEvery(defaults).mode, DetectEvery::Mode::Frames);
-  EXPECT_EQ(detectEvery(defaults).frames, 1);
-  defaults.detect_every = *parseDetectEvery("keyframes");
-  EXPECT_EQ(detectEvery(defaults).mode, DetectEvery::Mode::KeyFrames);
   DetectorParams off = sequence.config.detector;
   off.model = "none";
   const SemanticRun plain = runFirstFrames(sequence, off, 60);

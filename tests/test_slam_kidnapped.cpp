@@ -78,11 +78,11 @@ const StampedPose* groundTruthOf(const Sequence& sequence, double timestamp) {
   return nearest && std::abs(nearest->timestamp - timestamp) < 0.02 ? nearest : nullptr;
 }
 
+enum class Detector { Off, Default };
+
 // Plays `pieces` of the sequence in order, monocular or with depth. An RGB-D
 // run is aligned to the ground truth rigidly (its map is metric), a monocular
 // one with scale.
-enum class Detector { Off, Default };
-
 KidnappedRun runKidnapped(const Sequence& sequence, const std::vector<Piece>& pieces, SensorMode sensor,
                           bool deterministic, Detector detector = Detector::Off) {
   SystemOptions options;

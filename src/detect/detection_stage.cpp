@@ -18,11 +18,16 @@ BoxCarrierParams carrierParams(const DetectorParams& params) {
   return carrier;
 }
 
+// The stage keeps one rate, the one in force: unset in the config, it is resolved here.
+DetectorParams withRateResolved(DetectorParams params) {
+  params.detect_every = vslam::detectEvery(params);
+  return params;
+}
+
 }  // namespace
 
 DetectionStage::DetectionStage(const DetectorParams& params, StageTimer* timer, bool deterministic)
-    : params_(params),
-      every_(vslam::detectEvery(params)),
+    : params_(withRateResolved(params)),
       deterministic_(deterministic),
       detector_(std::make_unique<YoloDetector>(params, locateModel(params))),
       carrier_(carrierParams(params)) {
@@ -49,7 +54,7 @@ DetectionStage::~DetectionStage() {
 }
 
 bool DetectionStage::isTurn(int frame_index) const {
-  return every_.mode == DetectEvery::Mode::Frames && frame_index % every_.frames == 0;
+  return detectEvery().mode == DetectEvery::Mode::Frames && frame_index % detectEvery().frames == 0;
 }
 
 void DetectionStage::submitAhead(int frame_index, const cv::Mat& bgr) {
@@ -64,11 +69,11 @@ void DetectionStage::submitWithSnapshot(const FeatureSnapshot& frame, const cv::
 }
 
 std::vector<Detection> DetectionStage::boxesFor(const FeatureSnapshot& frame, const cv::Mat& bgr) {
-  if (every_.mode == DetectEvery::Mode::Frames) {
+  if (detectEvery().mode == DetectEvery::Mode::Frames) {
     if (isTurn(frame.frame_index)) {
       if (!async_->pending(frame.frame_index)) async_->submit(frame.frame_index, bgr);
       const std::vector<Detection> detections = async_->wait(frame.frame_index);
-      if (every_.frames > 1) {
+      if (detectEvery().frames > 1) {
         // Carry the old boxes here too, only to measure them against the new ones.
         carrier_.advance(frame);
         for (const Detection& fresh : detections) {
@@ -118,7 +123,7 @@ std::vector<Detection> DetectionStage::boxesFor(const FeatureSnapshot& frame, co
 }
 
 void DetectionStage::afterTrack(const FeatureSnapshot& frame, const cv::Mat& bgr, bool made_keyframe) {
-  const DetectEvery::Mode mode = every_.mode;
+  const DetectEvery::Mode mode = detectEvery().mode;
   if (mode == DetectEvery::Mode::Frames) return;
   if (mode == DetectEvery::Mode::KeyFrames || deterministic_) {
     if (made_keyframe) submitWithSnapshot(frame, bgr);

@@ -65,8 +65,9 @@ class DetectionStage {
   // frame in hand when the network has rested long enough. Never waits.
   void afterTrack(const FeatureSnapshot& frame, const cv::Mat& bgr, bool made_keyframe);
 
+  // The params in force: detect_every is always set, resolved by detectEvery().
   const DetectorParams& params() const { return params_; }
-  const DetectEvery& detectEvery() const { return every_; }  // the rate in force, resolved
+  const DetectEvery& detectEvery() const { return *params_.detect_every; }
   const ModelFiles& files() const { return detector_->files(); }
   const std::vector<std::string>& classNames() const { return detector_->classNames(); }
   const std::vector<int>& dynamicClassIds() const { return dynamic_class_ids_; }
@@ -79,7 +80,6 @@ class DetectionStage {
   void submitWithSnapshot(const FeatureSnapshot& frame, const cv::Mat& bgr);
 
   DetectorParams params_;
-  DetectEvery every_;
   bool deterministic_;
   std::unique_ptr<YoloDetector> detector_;
   std::vector<int> dynamic_class_ids_;

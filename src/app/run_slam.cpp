@@ -482,6 +482,7 @@ void printSummary(const nlohmann::json& report, System& system, const Sequence& 
               << " frames)";
   std::cout << "\nframes tracked: " << report["frames_tracked"].get<int>() << " / " << stats.frames;
   if (stats.initialised_at_index >= 0) std::cout << " (initialised at frame " << stats.initialised_at_index << ")";
+  if (!stats.start_failure.empty()) std::cout << "\nno map was started; the last attempt: " << stats.start_failure;
   if (!outcome.skipped.empty()) std::cout << ", " << outcome.skipped.size() << " skipped (unreadable)";
   std::cout << "\nkeyframes: " << stats.keyframes << ", map points: " << stats.map_points << "\n";
   if (!options.load_map.empty())
@@ -669,6 +670,8 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   for (const SkippedFrame& skipped : outcome.skipped)
     report["skipped_frames"].push_back({{"frame", skipped.index}, {"file", skipped.file}, {"reason", skipped.reason}});
   report["initialised_at_frame"] = stats.initialised_at_index;
+  // Why no map was started, when none was (null otherwise).
+  report["start_failure"] = stats.start_failure.empty() ? nlohmann::json() : nlohmann::json(stats.start_failure);
   report["keyframes"] = stats.keyframes;
   report["map_points"] = stats.map_points;
   report["local_bundle_adjustments"] = stats.local_bundle_adjustments;

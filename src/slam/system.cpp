@@ -213,6 +213,7 @@ SystemStats System::stats() const {
   stats.keyframes = static_cast<int>(map_->keyframeCount());
   stats.map_points = static_cast<int>(map_->mapPointCount());
   stats.initialised_at_index = tracking_->initialisedAtIndex();
+  if (stats.initialised_at_index < 0) stats.start_failure = tracking_->lastStartFailure();
   stats.local_bundle_adjustments = local_mapping_->localBundleAdjustments();
   stats.culled_keyframes = local_mapping_->culledKeyFrames();
   stats.relocalisations = tracking_->relocalisations();

@@ -6,6 +6,7 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include <spdlog/fmt/fmt.h>
 #include <spdlog/spdlog.h>
 
 #include "vslam/feature/matcher.hpp"
@@ -258,6 +259,8 @@ void Tracking::initialise(Frame& frame) {
     return;
   }
   if (static_cast<int>(frame.size()) <= kInitMinKeypoints) {
+    start_failure_ = fmt::format("frame {}: {} keypoints, more than {} needed", frame.index, frame.size(),
+                                 kInitMinKeypoints);
     init_reference_.reset();
     return;
   }
@@ -268,6 +271,8 @@ void Tracking::initialise(Frame& frame) {
   const WindowMatches matched = matchInWindow(reference.view(), frame.view(), frame.grid, init_prev_matched_, window);
   const std::vector<int>& matches_ref_cur = matched.matches12;
   if (matched.count < kInitMinMatches) {
+    start_failure_ = fmt::format("frame {} against frame {}: {} window matches, {} needed", frame.index,
+                                 reference.index, matched.count, kInitMinMatches);
     // Too little overlap: start again from this frame.
     init_reference_ = std::make_unique<Frame>(frame);
     init_prev_matched_ = frame.points;
@@ -289,6 +294,8 @@ void Tracking::initialise(Frame& frame) {
                 result.score_ratio, result.median_parallax_deg, result.translation_direction_std_deg,
                 result.success ? "ok" : result.failure_reason);
   if (!result.success) {
+    start_failure_ = fmt::format("frame {} against frame {}: {} matches, {}", frame.index, reference.index,
+                                 matched.count, result.failure_reason);
     return;
   }
 
@@ -345,6 +352,8 @@ void Tracking::initialise(Frame& frame) {
   if (median_depth <= 0 || kf_cur->trackedMapPoints(1) < kInitMinKeypoints) {
     spdlog::info("frame {}: initialisation rejected (median depth {:.3f}, {} points)", frame.index, median_depth,
                  kf_cur->trackedMapPoints(1));
+    start_failure_ = fmt::format("frame {}: {} map points after the two-view bundle adjustment, {} needed",
+                                 frame.index, kf_cur->trackedMapPoints(1), kInitMinKeypoints);
     map_.clear();
     return;
   }
@@ -400,6 +409,8 @@ void Tracking::initialiseFromDepth(Frame& frame) {
   for (size_t i = 0; i < frame.size(); ++i)
     if (frame.hasDepth(i)) ++with_depth;
   if (with_depth < kInitMinKeypointsWithDepth) {
+    start_failure_ = fmt::format("frame {}: {} keypoints with depth, {} needed", frame.index, with_depth,
+                                 kInitMinKeypointsWithDepth);
     spdlog::debug("frame {}: {} keypoints with depth, {} needed to initialise", frame.index, with_depth,
                   kInitMinKeypointsWithDepth);
     return;

@@ -70,6 +70,7 @@ struct SystemStats {
   int keyframes = 0;
   int map_points = 0;
   int initialised_at_index = -1;
+  std::string start_failure;  // with no map started: why the last attempt failed (Tracking::lastStartFailure)
   int local_bundle_adjustments = 0;
   int culled_keyframes = 0;
   int relocalisations = 0;

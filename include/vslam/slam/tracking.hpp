@@ -105,6 +105,10 @@ class Tracking {
   TrackingState state() const { return state_; }
   const std::vector<FrameRecord>& records() const { return records_; }
   int initialisedAtIndex() const { return initialised_at_index_; }
+  // Why the last attempt to start a map failed ("frame 15 against frame 0:
+  // 612 matches, insufficient parallax ..."); empty before any attempt. A run
+  // that never starts a map reports it.
+  const std::string& lastStartFailure() const { return start_failure_; }
   int keyframesCreated() const { return keyframes_created_; }
   int lastTrackedPoints() const { return last_tracked_points_; }
   // Map points matched in the last frame's local-map search, before the pose
@@ -170,6 +174,7 @@ class Tracking {
   int local_map_matches_ = 0;  // matches the last trackLocalMap optimised the pose on
   int last_matched_points_ = 0;
   int initialised_at_index_ = -1;
+  std::string start_failure_;
   int keyframes_created_ = 0;
   std::vector<FrameRecord> records_;
   const Vocabulary* vocabulary_ = nullptr;

@@ -39,6 +39,31 @@ inline std::uint8_t paeth(int left, int up, int up_left) {
   return static_cast<std::uint8_t>(to_left <= to_up && to_left <= to_up_left ? left : nearer_up);
 }
 
+// Sub and Paeth chain each byte to the one a pixel to its left. The two bytes
+// of a 16-bit pixel are two independent chains, and their last values are
+// kept in registers: reading them back from the row just written made every
+// step wait for the store (docs/BENCHMARKS.md, "Depth image decoding").
+// row_bytes is even: whole 16-bit pixels.
+void unfilterSub(std::uint8_t* row, std::size_t row_bytes) {
+  if (row_bytes < kBytesPerPixel) return;
+  std::uint8_t high = row[0], low = row[1];
+  for (std::size_t i = kBytesPerPixel; i + 1 < row_bytes; i += kBytesPerPixel) {
+    high = row[i] = static_cast<std::uint8_t>(row[i] + high);
+    low = row[i + 1] = static_cast<std::uint8_t>(row[i + 1] + low);
+  }
+}
+
+// The first pixel has nothing to its left: Paeth gives Up there.
+void unfilterPaeth(std::uint8_t* row, const std::uint8_t* up, std::size_t row_bytes) {
+  if (row_bytes < kBytesPerPixel) return;
+  std::uint8_t high = row[0] = static_cast<std::uint8_t>(row[0] + up[0]);
+  std::uint8_t low = row[1] = static_cast<std::uint8_t>(row[1] + up[1]);
+  for (std::size_t i = kBytesPerPixel; i + 1 < row_bytes; i += kBytesPerPixel) {
+    high = row[i] = static_cast<std::uint8_t>(row[i] + paeth(high, up[i], up[i - 2]));
+    low = row[i + 1] = static_cast<std::uint8_t>(row[i + 1] + paeth(low, up[i + 1], up[i - 1]));
+  }
+}
+
 // Undoes the row filters in place (PNG specification, section 9); `rows` holds
 // each row's filter byte followed by its `row_bytes` bytes.
 void unfilterRows(std::uint8_t* rows, int height, std::size_t row_bytes, const std::string& file) {
@@ -51,7 +76,7 @@ void unfilterRows(std::uint8_t* rows, int height, std::size_t row_bytes, const s
       case 0:
         break;
       case 1:  // Sub
-        for (std::size_t i = kBytesPerPixel; i < row_bytes; ++i) row[i] += row[i - kBytesPerPixel];
+        unfilterSub(row, row_bytes);
         break;
       case 2:  // Up
         if (up)
@@ -63,14 +88,11 @@ void unfilterRows(std::uint8_t* rows, int height, std::size_t row_bytes, const s
           row[i] += static_cast<std::uint8_t>((left + (up ? up[i] : 0)) / 2);
         }
         break;
-      case 4:  // Paeth; in the first row (nothing above) it is Sub, and its first pixel is Up
-        if (!up) {
-          for (std::size_t i = kBytesPerPixel; i < row_bytes; ++i) row[i] += row[i - kBytesPerPixel];
-          break;
-        }
-        for (std::size_t i = 0; i < kBytesPerPixel && i < row_bytes; ++i) row[i] += up[i];
-        for (std::size_t i = kBytesPerPixel; i < row_bytes; ++i)
-          row[i] += paeth(row[i - kBytesPerPixel], up[i], up[i - kBytesPerPixel]);
+      case 4:  // Paeth; in the first row (nothing above) it is Sub
+        if (up)
+          unfilterPaeth(row, up, row_bytes);
+        else
+          unfilterSub(row, row_bytes);
         break;
       default:
         throw InputError(file, 0, "corrupt PNG: row " + std::to_string(y) + " has unknown filter type " +
@@ -134,24 +156,25 @@ cv::Mat decodeGray16Png(const std::uint8_t* data, std::size_t size, const std::s
     throw InputError(file, 0,
                      "corrupt PNG: " + std::to_string(compressed.size()) + " bytes of image data cannot hold " +
                          std::to_string(width) + "x" + std::to_string(height) + " 16-bit pixels");
-  std::vector<std::uint8_t> rows(image_bytes);
+  // Left uninitialised: a successful inflate writes every byte (see below).
+  std::unique_ptr<std::uint8_t[]> rows(new std::uint8_t[image_bytes]);
   std::unique_ptr<libdeflate_decompressor, decltype(&libdeflate_free_decompressor)> inflater(
       libdeflate_alloc_decompressor(), &libdeflate_free_decompressor);
   if (!inflater) throw std::bad_alloc();
-  // A null actual size asks for exactly rows.size() bytes: fewer or more is an error.
+  // A null actual size asks for exactly image_bytes bytes: fewer or more is an error.
   const libdeflate_result result =
-      libdeflate_zlib_decompress(inflater.get(), compressed.data(), compressed.size(), rows.data(), rows.size(), nullptr);
+      libdeflate_zlib_decompress(inflater.get(), compressed.data(), compressed.size(), rows.get(), image_bytes, nullptr);
   if (result != LIBDEFLATE_SUCCESS)
     throw InputError(file, 0,
                      result == LIBDEFLATE_BAD_DATA ? "corrupt PNG: its image data does not inflate"
                                                    : "corrupt PNG: its image data does not inflate to " +
                                                          std::to_string(width) + "x" + std::to_string(height) +
                                                          " 16-bit pixels");
-  unfilterRows(rows.data(), static_cast<int>(height), row_bytes, file);
+  unfilterRows(rows.get(), static_cast<int>(height), row_bytes, file);
 
   cv::Mat image(static_cast<int>(height), static_cast<int>(width), CV_16UC1);
   for (int y = 0; y < image.rows; ++y) {
-    const std::uint8_t* row = rows.data() + y * (row_bytes + 1) + 1;
+    const std::uint8_t* row = rows.get() + y * (row_bytes + 1) + 1;
     auto* out = image.ptr<std::uint16_t>(y);
     for (int x = 0; x < image.cols; ++x) out[x] = static_cast<std::uint16_t>((row[2 * x] << 8) | row[2 * x + 1]);
   }

@@ -292,20 +292,24 @@ TEST(ReliabilityData, IncompleteNamedSequenceIsFlagged) {
 // 16 shared frames of fr3_long_office_household move the camera 1.9 cm
 // (ground truth), 0.6 deg of parallax against the 1 deg a monocular start
 // needs. Before, the run said only "frames tracked: 0 / 16". A run that
-// starts a map has no such line, and null in the report.
+// starts a map has no such line, and null in the report. Threaded (the
+// default) and deterministic alike.
 TEST(ReliabilityData, ARunThatStartsNoMapSaysWhy) {
   const fs::path dir = test::scratchDir("reliability_no_start");
-  const Outcome run = vslam("run --seq tum/fr3_long_office_household --detector none --deterministic --no-render "
-                            "--out " + quoted((dir / "run").string()),
-                            dir);
-  ASSERT_EQ(run.exit_code, 0) << run.err;
-  const nlohmann::json report = nlohmann::json::parse(slurp(dir / "run" / "report.json"));
-  EXPECT_EQ(report["frames_tracked"], 0);
-  ASSERT_TRUE(report["start_failure"].is_string()) << report.dump(2);
-  const std::string why = report["start_failure"];
-  EXPECT_TRUE(contains(why, "frame 15 against frame 0")) << why;
-  EXPECT_TRUE(contains(why, "insufficient parallax")) << why;
-  EXPECT_TRUE(contains(run.out, "no map was started; the last attempt: " + why)) << run.out;
+  for (const std::string mode : {"", " --deterministic"}) {
+    SCOPED_TRACE(mode.empty() ? "threaded" : "deterministic");
+    const Outcome run = vslam("run --seq tum/fr3_long_office_household --detector none --no-render" + mode +
+                                  " --out " + quoted((dir / "run").string()),
+                              dir);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const nlohmann::json report = nlohmann::json::parse(slurp(dir / "run" / "report.json"));
+    EXPECT_EQ(report["frames_tracked"], 0);
+    ASSERT_TRUE(report["start_failure"].is_string()) << report.dump(2);
+    const std::string why = report["start_failure"];
+    EXPECT_TRUE(contains(why, "frame 15 against frame 0")) << why;
+    EXPECT_TRUE(contains(why, "insufficient parallax")) << why;
+    EXPECT_TRUE(contains(run.out, "no map was started; the last attempt: " + why)) << run.out;
+  }
 
   const Outcome started = vslam("run --seq tum/fr1_xyz --mode rgbd --max-frames 3 --detector none --deterministic "
                                 "--no-render --out " + quoted((dir / "started").string()),

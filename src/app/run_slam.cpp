@@ -482,8 +482,8 @@ void printSummary(const nlohmann::json& report, System& system, const Sequence& 
               << " frames)";
   std::cout << "\nframes tracked: " << report["frames_tracked"].get<int>() << " / " << stats.frames;
   if (stats.initialised_at_index >= 0) std::cout << " (initialised at frame " << stats.initialised_at_index << ")";
-  if (!stats.start_failure.empty()) std::cout << "\nno map was started; the last attempt: " << stats.start_failure;
   if (!outcome.skipped.empty()) std::cout << ", " << outcome.skipped.size() << " skipped (unreadable)";
+  if (!stats.start_failure.empty()) std::cout << "\nno map was started; the last attempt: " << stats.start_failure;
   std::cout << "\nkeyframes: " << stats.keyframes << ", map points: " << stats.map_points << "\n";
   if (!options.load_map.empty())
     std::cout << "localised in the loaded map (" << options.load_map << (options.localize ? ", localisation only" : "")

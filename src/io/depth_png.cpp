@@ -59,8 +59,8 @@ void unfilterPaeth(std::uint8_t* row, const std::uint8_t* up, std::size_t row_by
   std::uint8_t high = row[0] = static_cast<std::uint8_t>(row[0] + up[0]);
   std::uint8_t low = row[1] = static_cast<std::uint8_t>(row[1] + up[1]);
   for (std::size_t i = kBytesPerPixel; i + 1 < row_bytes; i += kBytesPerPixel) {
-    high = row[i] = static_cast<std::uint8_t>(row[i] + paeth(high, up[i], up[i - 2]));
-    low = row[i + 1] = static_cast<std::uint8_t>(row[i + 1] + paeth(low, up[i + 1], up[i - 1]));
+    high = row[i] = static_cast<std::uint8_t>(row[i] + paeth(high, up[i], up[i - kBytesPerPixel]));
+    low = row[i + 1] = static_cast<std::uint8_t>(row[i + 1] + paeth(low, up[i + 1], up[i + 1 - kBytesPerPixel]));
   }
 }
 

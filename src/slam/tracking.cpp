@@ -349,11 +349,12 @@ void Tracking::initialise(Frame& frame) {
 
   // Scale the map so the first keyframe's median scene depth is 1.
   const double median_depth = kf_ref->medianSceneDepth();
-  if (median_depth <= 0 || kf_cur->trackedMapPoints(1) < kInitMinKeypoints) {
-    spdlog::info("frame {}: initialisation rejected (median depth {:.3f}, {} points)", frame.index, median_depth,
-                 kf_cur->trackedMapPoints(1));
-    start_failure_ = fmt::format("frame {}: {} map points after the two-view bundle adjustment, {} needed",
-                                 frame.index, kf_cur->trackedMapPoints(1), kInitMinKeypoints);
+  const int tracked_points = kf_cur->trackedMapPoints(1);
+  if (median_depth <= 0 || tracked_points < kInitMinKeypoints) {
+    start_failure_ = fmt::format("frame {} against frame {}: rejected after the two-view bundle adjustment (median "
+                                 "depth {:.3f}, {} points, {} needed)",
+                                 frame.index, reference.index, median_depth, tracked_points, kInitMinKeypoints);
+    spdlog::info("initialisation {}", start_failure_);
     map_.clear();
     return;
   }
@@ -411,8 +412,7 @@ void Tracking::initialiseFromDepth(Frame& frame) {
   if (with_depth < kInitMinKeypointsWithDepth) {
     start_failure_ = fmt::format("frame {}: {} keypoints with depth, {} needed", frame.index, with_depth,
                                  kInitMinKeypointsWithDepth);
-    spdlog::debug("frame {}: {} keypoints with depth, {} needed to initialise", frame.index, with_depth,
-                  kInitMinKeypointsWithDepth);
+    spdlog::debug("initialisation: {}", start_failure_);
     return;
   }
   std::lock_guard<std::mutex> lock(map_.mutex());

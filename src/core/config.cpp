@@ -167,6 +167,7 @@ Config loadVslamYaml(const std::string& text, const std::string& path) {
   reader.optional(loop, "loop", "consistency", config.loop.consistency);
   reader.optional(loop, "loop", "final_ba", config.loop.final_ba);
   reader.optional(loop, "loop", "final_ba_iterations", config.loop.final_ba_iterations);
+  reader.optional(loop, "loop", "refine_frames", config.loop.refine_frames);
   reader.optional(loop, "loop", "vocabulary", config.loop.vocabulary);
 
   const YAML::Node det = reader.section("detector");

@@ -135,6 +135,19 @@ bool System::finish(const FinishOptions& finish_options) {
     if (loop_closing_) loop_closing_->finish();
   }
   rethrowWorkerFailure();
+  const bool merged = runFinalBundleAdjustment(finish_options);
+  // Frames were posed against the map as it stood when they were tracked;
+  // since then bundle adjustments have moved it (a young monocular map's scale
+  // most of all), so each is posed again against its matched points.
+  if (config_.loop.refine_frames && tracking_->state() != TrackingState::NotInitialized && !localize_) {
+    ScopedStage stage(&timer_, "refine_frames");
+    std::lock_guard<std::mutex> lock(map_->mutex());
+    spdlog::info("frames posed again in the final map: {}", tracking_->refineFramePoses(config_.camera));
+  }
+  return merged;
+}
+
+bool System::runFinalBundleAdjustment(const FinishOptions& finish_options) {
   if (!config_.loop.final_ba || !finish_options.final_ba || tracking_->state() == TrackingState::NotInitialized ||
       localize_)
     return false;

@@ -1,8 +1,10 @@
 #include "vslam/slam/tracking.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <map>
+#include <thread>
 
 #include <opencv2/calib3d.hpp>
 
@@ -215,8 +217,9 @@ bool Tracking::track(Frame& frame) {
     record.reference = reference_keyframe_;
     record.T_c_ref = frame.T_cw * reference_keyframe_->pose().inverse();
     record.by_odometry = odometry_only_;
+    if (!keyframe_made && config_.loop.refine_frames) recordMatches(frame, record);
   }
-  records_.push_back(record);
+  records_.push_back(std::move(record));
   // Early failure: a map just initialised (a few keyframes) is not worth
   // keeping. A larger map is kept while relocalisation can still succeed.
   const bool reset = !ok && !map_loaded_ && map_.keyframeCount() <= kResetMaxKeyFrames;
@@ -889,6 +892,60 @@ void Tracking::createKeyFrame(Frame& frame) {
   local_mapping_.insertKeyFrame(keyframe);
 }
 
+void Tracking::recordMatches(const Frame& frame, FrameRecord& record) const {
+  for (size_t i = 0; i < frame.size(); ++i) {
+    if (!frame.map_points[i] || frame.outlier[i]) continue;
+    record.matches.push_back({frame.map_points[i], frame.point(i).cast<float>(),
+                              static_cast<float>(frame.pyramid->inv_sigma2[frame.keypoints[i].octave]),
+                              static_cast<float>(frame.rightCoordinate(i))});
+  }
+}
+
+// One frame: its matches' points as the map now holds them (fused points
+// followed to the point that took their observations, culled ones left out),
+// and the pose optimisation Tracking uses, from the frame's current pose.
+// Returns false when fewer than 30 matches or inliers remain.
+static bool refineFramePose(const PinholeCamera& camera, FrameRecord& record) {
+  constexpr size_t kMinMatches = 30;
+  std::vector<Vec3> points_w;
+  std::vector<Observation2D> observations;
+  for (const FrameRecord::Match& match : record.matches) {
+    MapPoint* point = match.point;
+    // A few hops at most; the bound only guards against a cycle.
+    for (int hop = 0; hop < 16 && point->replacement(); ++hop) point = point->replacement();
+    if (point->isBad()) continue;
+    observations.push_back({static_cast<int>(points_w.size()), match.pixel.cast<double>(), match.inv_sigma2,
+                            std::isnan(match.u_right) ? kNoRightCoordinate : double(match.u_right)});
+    points_w.push_back(point->position());
+  }
+  record.matches.clear();
+  record.matches.shrink_to_fit();
+  if (!record.tracked || !record.reference || observations.size() < kMinMatches) return false;
+  KeyFrame* live = nullptr;
+  const SE3 T_cw = poseThroughReference(record.reference, record.T_c_ref, &live);
+  const PoseOptimizationResult result = optimizePose(camera, camera.bf, T_cw, points_w, observations);
+  if (result.n_inliers < static_cast<int>(kMinMatches)) return false;
+  record.reference = live;
+  record.T_c_ref = result.T_cw * live->pose().inverse();
+  return true;
+}
+
+int Tracking::refineFramePoses(const PinholeCamera& camera) {
+  // The other threads have stopped and the caller holds the map lock, so the
+  // map is only read here: the frames are split between this thread and one
+  // more (the run's two cores are otherwise idle now).
+  std::atomic<int> refined{0};
+  auto refineRange = [&](size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k)
+      if (refineFramePose(camera, records_[k])) ++refined;
+  };
+  const size_t half = records_.size() / 2;
+  std::thread second_half(refineRange, half, records_.size());
+  refineRange(0, half);
+  second_half.join();
+  return refined.load();
+}
+
 void Tracking::resetMap() {
   // Stop the other threads' work on the old map first: nothing may hold its
   // pointers or ids (queued keyframes, consistency groups, a running full BA).
@@ -899,6 +956,7 @@ void Tracking::resetMap() {
   for (FrameRecord& record : records_) {
     record.tracked = false;
     record.reference = nullptr;
+    record.matches.clear();
   }
   local_keyframes_.clear();
   local_points_.clear();

@@ -135,7 +135,8 @@ class System {
   void submitAhead(int index, const cv::Mat& image);
   // Lets Local Mapping and Loop Closing finish their queues, stops the
   // threads, then runs the final full bundle adjustment (config.loop.final_ba
-  // and options.final_ba). Returns true when a final BA result was merged.
+  // and options.final_ba) and poses every tracked frame again in the final
+  // map (config.loop.refine_frames). Returns true when a final BA result was merged.
   bool finish(const FinishOptions& options = FinishOptions());
 
   std::vector<StampedPose> frameTrajectory() const;     // every tracked frame, T_wc
@@ -172,6 +173,7 @@ class System {
   LoopClosingState loopClosingState() const;
 
  private:
+  bool runFinalBundleAdjustment(const FinishOptions& options);
   Config config_;
   SystemOptions options_;
   // Rethrows, on the caller's thread, an exception that stopped a worker thread.

@@ -8,7 +8,9 @@ ground-truth poses, and the depth image's reading at the keypoint is divided
 by the triangulated depth. A median ratio of 1 means the depth images and the
 motion-capture trajectory agree on scale; 0.99 means the depth reads 1 % short,
 so any RGB-D map built from it comes out 1 % small. Nothing of vslam is used:
-the check is independent of the SLAM system it explains.
+the check is independent of the SLAM system it explains. The depth image is
+taken as seen at its colour frame's time (they are paired within 20 ms), as
+vslam pairs them; in fast motion that adds noise to the ratios.
 
   tools/depth_scale_check.py --seq ../shared/data/tum/rgbd_dataset_freiburg3_teddy \
       --intrinsics 535.4 539.2 320.1 247.6
@@ -24,14 +26,28 @@ import cv2
 import numpy as np
 
 
-def read_list(path):
+def fail(message):
+    sys.exit(f'depth_scale_check: {message}')
+
+
+def read_list(path, values):
+    """A TUM list: 'timestamp' and `values` more fields a line, '#' comments."""
+    if not os.path.isfile(path):
+        fail(f'{path}: no such file')
     entries = []
     with open(path) as f:
-        for line in f:
+        for number, line in enumerate(f, 1):
             if line.startswith('#') or not line.strip():
                 continue
             parts = line.split()
-            entries.append((float(parts[0]), parts[1:]))
+            if len(parts) != 1 + values:
+                fail(f'{path}:{number}: expected {1 + values} fields, found {len(parts)}')
+            try:
+                entries.append((float(parts[0]), parts[1:]))
+            except ValueError:
+                fail(f'{path}:{number}: the timestamp {parts[0]!r} is not a number')
+    if not entries:
+        fail(f'{path}: no entries')
     return entries
 
 
@@ -45,7 +61,12 @@ def quat_to_matrix(qx, qy, qz, qw):
 
 class GroundTruth:
     def __init__(self, path):
-        rows = [(t, [float(v) for v in values]) for t, values in read_list(path)]
+        rows = []
+        for t, values in read_list(path, 7):  # tx ty tz qx qy qz qw
+            try:
+                rows.append((t, [float(v) for v in values]))
+            except ValueError:
+                fail(f'{path}: a pose at {t} has a value that is not a number')
         self.times = [t for t, _ in rows]
         self.poses = [v for _, v in rows]
 
@@ -83,12 +104,14 @@ def main():
     parser.add_argument('--time-offset', default='auto',
                         help="s added to colour timestamps before the ground-truth lookup, or 'auto' (default)")
     args = parser.parse_args()
+    if args.stride < 1 or args.depth_factor <= 0 or args.min_baseline <= 0:
+        fail('--stride must be >= 1, --depth-factor and --min-baseline > 0')
 
     fx, fy, cx, cy = args.intrinsics
     K = np.array([[fx, 0, cx], [0, fy, cy], [0, 0, 1.0]])
     dist = np.array(args.distortion)
-    rgb = read_list(os.path.join(args.seq, 'rgb.txt'))
-    depth = read_list(os.path.join(args.seq, 'depth.txt'))
+    rgb = read_list(os.path.join(args.seq, 'rgb.txt'), 1)
+    depth = read_list(os.path.join(args.seq, 'depth.txt'), 1)
     depth_times = [t for t, _ in depth]
     gt = GroundTruth(os.path.join(args.seq, 'groundtruth.txt'))
 
@@ -109,6 +132,8 @@ def main():
     def features(name):
         if name not in features_of:
             image = cv2.imread(os.path.join(args.seq, name), cv2.IMREAD_GRAYSCALE)
+            if image is None:
+                fail(f'{os.path.join(args.seq, name)}: cannot be read as an image')
             keypoints, descriptors = orb.detectAndCompute(image, None)
             pixels = np.array([kp.pt for kp in keypoints], dtype=np.float64).reshape(-1, 1, 2)
             # Undistorted pixels: the depth image is registered to the pinhole model.
@@ -127,7 +152,12 @@ def main():
 
     def depth_image(name):
         if name not in depth_of:
-            raw = cv2.imread(os.path.join(args.seq, name), cv2.IMREAD_UNCHANGED)
+            path = os.path.join(args.seq, name)
+            raw = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+            if raw is None:
+                fail(f'{path}: cannot be read as an image')
+            if raw.dtype != np.uint16 or raw.ndim != 2:
+                fail(f'{path}: not a 16-bit single-channel depth image (TUM format)')
             depth_of[name] = raw.astype(np.float64) / args.depth_factor
         return depth_of[name]
 
@@ -167,17 +197,21 @@ def main():
         grid = [k * 0.0025 for k in range(-12, 13)]
         scores = [median_epipolar(offset) for offset in grid]
         offset = grid[int(np.argmin(scores))]
+        if offset in (grid[0], grid[-1]):
+            print(f'warning: the best clock offset is at the edge of the +-30 ms searched; give --time-offset')
         print(f'time offset: {offset * 1000:+.1f} ms (median epipolar distance {min(scores):.3f} px; '
               f'{scores[grid.index(0.0)]:.3f} px at 0)')
     else:
-        offset = float(args.time_offset)
+        try:
+            offset = float(args.time_offset)
+        except ValueError:
+            fail(f"--time-offset: {args.time_offset!r} is neither seconds nor 'auto'")
 
-    ratios, depths, n_pairs = [], [], 0
+    ratios, depths, n_pairs = [], [], 0  # n_pairs: pairs that gave at least one point
     for name_i, name_j, depth_name, T_ji in pairs_at(offset):
         a, b = matched(name_i, name_j)
         if not len(a):
             continue
-        n_pairs += 1
         keep = epipolar_distances(a, b, T_ji) < args.max_epipolar
         if not keep.any():
             continue
@@ -189,6 +223,7 @@ def main():
         X = (X[:3] / X[3]).T  # in camera i
         centre_j = -R.T @ t
         image = depth_image(depth_name)
+        before = len(ratios)
         for p, x in zip(a, X):
             if x[2] <= 0:
                 continue
@@ -206,6 +241,7 @@ def main():
                 continue
             ratios.append(d / x[2])
             depths.append(d)
+        n_pairs += len(ratios) > before
 
     ratios, depths = np.array(ratios), np.array(depths)
     if len(ratios) == 0:
@@ -215,7 +251,7 @@ def main():
     q1, med, q3 = np.percentile(ratios, [25, 50, 75])
     half = len(ratios) // 2
     print(f'depth reading / triangulated depth: median {med:.4f} (quartiles {q1:.4f}-{q3:.4f}); '
-          f'first half of the pairs {np.median(ratios[:half]):.4f}, second half {np.median(ratios[half:]):.4f}')
+          f'first half of the points (by time) {np.median(ratios[:half]):.4f}, second half {np.median(ratios[half:]):.4f}')
     for lo, hi in [(0, 1.0), (1.0, 1.5), (1.5, 2.0), (2.0, 3.0), (3.0, 10.0)]:
         sel = (depths >= lo) & (depths < hi)
         if sel.sum() >= 20:

@@ -138,8 +138,9 @@ bool System::finish(const FinishOptions& finish_options) {
   const bool merged = runFinalBundleAdjustment(finish_options);
   // Frames were posed against the map as it stood when they were tracked;
   // since then bundle adjustments have moved it (a young monocular map's scale
-  // most of all), so each is posed again against its matched points.
-  if (config_.loop.refine_frames && tracking_->state() != TrackingState::NotInitialized && !localize_) {
+  // most of all), so each is posed again against its matched points. Only
+  // after a final BA that was merged: a run stopped early ends quickly.
+  if (merged && config_.loop.refine_frames) {
     ScopedStage stage(&timer_, "refine_frames");
     std::lock_guard<std::mutex> lock(map_->mutex());
     spdlog::info("frames posed again in the final map: {}", tracking_->refineFramePoses(config_.camera));

@@ -1,10 +1,9 @@
 #include "vslam/slam/tracking.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <map>
-#include <thread>
+#include <future>
 
 #include <opencv2/calib3d.hpp>
 
@@ -217,7 +216,9 @@ bool Tracking::track(Frame& frame) {
     record.reference = reference_keyframe_;
     record.T_c_ref = frame.T_cw * reference_keyframe_->pose().inverse();
     record.by_odometry = odometry_only_;
-    if (!keyframe_made && config_.loop.refine_frames) recordMatches(frame, record);
+    // Not in localisation mode: the map does not change there, and odometry
+    // points are freed a frame later.
+    if (!keyframe_made && config_.loop.refine_frames && !localization_only_) recordMatches(frame, record);
   }
   records_.push_back(std::move(record));
   // Early failure: a map just initialised (a few keyframes) is not worth
@@ -446,21 +447,31 @@ MapPoint* Tracking::createPointFromDepth(KeyFrame* keyframe, size_t keypoint) {
   return point;
 }
 
-int Tracking::optimisePose(Frame& frame) {
-  std::vector<Vec3> points_w;
-  std::vector<Observation2D> observations;
-  std::vector<int> keypoint_of;
-  // Keypoints on objects that may move are left out while the static scene
-  // alone can give the pose (checkObjectMotion judges them afterwards).
+// Which matched keypoints the frame's pose is optimised over: those on
+// objects that may move are left out while the static scene alone can give
+// the pose (checkObjectMotion judges them afterwards).
+static std::vector<bool> matchesForPose(const Frame& frame) {
+  std::vector<bool> used(frame.size(), false);
   const bool has_labels = frame.labels.size() == frame.size();
   int static_matches = 0;
   for (size_t i = 0; i < frame.size(); ++i)
     if (frame.map_points[i] && (!has_labels || drivesPose(frame.labels[i]))) ++static_matches;
   const bool static_only = static_matches >= kMinStaticMatchesForPose;
+  for (size_t i = 0; i < frame.size(); ++i)
+    used[i] = frame.map_points[i] &&
+              !(has_labels && (onMovingObject(frame.labels[i]) || (static_only && !drivesPose(frame.labels[i]))));
+  return used;
+}
+
+int Tracking::optimisePose(Frame& frame) {
+  std::vector<Vec3> points_w;
+  std::vector<Observation2D> observations;
+  std::vector<int> keypoint_of;
+  const bool has_labels = frame.labels.size() == frame.size();
+  const std::vector<bool> for_pose = matchesForPose(frame);
   for (size_t i = 0; i < frame.size(); ++i) {
     MapPoint* point = frame.map_points[i];
-    if (!point) continue;
-    if (has_labels && (onMovingObject(frame.labels[i]) || (static_only && !drivesPose(frame.labels[i])))) continue;
+    if (!for_pose[i]) continue;
     keypoint_of.push_back(static_cast<int>(i));
     // Keypoints with depth add the right coordinate: (u, v, u_R), 3-DOF chi-square.
     observations.push_back({static_cast<int>(points_w.size()), frame.point(i),
@@ -893,8 +904,10 @@ void Tracking::createKeyFrame(Frame& frame) {
 }
 
 void Tracking::recordMatches(const Frame& frame, FrameRecord& record) const {
+  // The matches the tracked pose rests on, by the same rule.
+  const std::vector<bool> for_pose = matchesForPose(frame);
   for (size_t i = 0; i < frame.size(); ++i) {
-    if (!frame.map_points[i] || frame.outlier[i]) continue;
+    if (!for_pose[i] || frame.outlier[i]) continue;
     record.matches.push_back({frame.map_points[i], frame.point(i).cast<float>(),
                               static_cast<float>(frame.pyramid->inv_sigma2[frame.keypoints[i].octave]),
                               static_cast<float>(frame.rightCoordinate(i))});
@@ -933,17 +946,18 @@ static bool refineFramePose(const PinholeCamera& camera, FrameRecord& record) {
 int Tracking::refineFramePoses(const PinholeCamera& camera) {
   // The other threads have stopped and the caller holds the map lock, so the
   // map is only read here: the frames are split between this thread and one
-  // more (the run's two cores are otherwise idle now).
-  std::atomic<int> refined{0};
+  // more (map.hpp).
   auto refineRange = [&](size_t begin, size_t end) {
-    for (size_t k = begin; k < end; ++k)
-      if (refineFramePose(camera, records_[k])) ++refined;
+    int refined = 0;
+    for (size_t k = begin; k < end; ++k) refined += refineFramePose(camera, records_[k]) ? 1 : 0;
+    return refined;
   };
   const size_t half = records_.size() / 2;
-  std::thread second_half(refineRange, half, records_.size());
-  refineRange(0, half);
-  second_half.join();
-  return refined.load();
+  // std::async: an exception on either half reaches the caller (the future
+  // waits for its thread), instead of terminating the process.
+  std::future<int> second_half = std::async(std::launch::async, refineRange, half, records_.size());
+  const int first = refineRange(0, half);
+  return first + second_half.get();
 }
 
 void Tracking::resetMap() {

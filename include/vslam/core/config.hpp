@@ -60,8 +60,9 @@ struct LoopParams {
   int consistency = 3;
   bool final_ba = true;
   int final_ba_iterations = 20;
-  // After the final BA, every tracked frame that is not a keyframe is posed
-  // again against the points it matched, as the final map holds them.
+  // After a final BA that was merged, every tracked frame that is not a
+  // keyframe is posed again against the points it matched, as the final map
+  // holds them (docs/LOOP_CLOSING.md).
   bool refine_frames = true;
   // Place-recognition vocabulary for relocalisation and loop detection. A
   // relative path not found from the working directory is taken from the

@@ -28,6 +28,10 @@
 // Mapping cannot cull them meanwhile, and re-checks them under the lock.
 // Tracking re-derives its last frame's pose from its reference keyframe every
 // frame, so local BA and loop corrections reach the motion model.
+// (5) At the end of a run, after the final BA, System::finish holds the lock
+// while Tracking poses its frames again on two threads (refineFramePoses);
+// the other threads have stopped, both only read the map, and each writes
+// its own frames' records.
 //
 // Back-pressure (offline runs, Tracking::KeyFrameInsertion::WaitForMapping):
 // Tracking never holds the lock while it waits for Local Mapping. It inserts

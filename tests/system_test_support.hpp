@@ -3,10 +3,12 @@
 // that run with the detector on.
 #include <algorithm>
 #include <limits>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
 #include "vslam/io/sequence.hpp"
+#include "vslam/render/room_loop.hpp"
 #include "vslam/slam/system.hpp"
 
 namespace vslam::test {
@@ -29,6 +31,21 @@ inline void feedFrames(System& system, const Sequence& sequence, bool with_depth
     system.processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, colour,
                         has_depth ? sequence.loadDepthMeters(i, colour.size()) : cv::Mat());
     colour = next;
+  }
+}
+
+// Frames [begin, end) of the synthetic room, rendered along `path`; with
+// `with_depth` each gets its rendered depth through the TUM 16-bit encoding
+// (factor 5000), as `vslam run` reads it. Does not call finish().
+inline void feedRoom(System& system, RoomLoopRenderer& renderer, const std::vector<StampedPose>& path,
+                     bool with_depth = false, size_t begin = 0,
+                     size_t end = std::numeric_limits<size_t>::max()) {
+  constexpr double kDepthFactor = 5000.0;
+  for (size_t k = begin; k < std::min(end, path.size()); ++k) {
+    cv::Mat depth;
+    if (with_depth)
+      encodeTumDepth(renderer.renderDepth(path[k].T_wc), kDepthFactor).convertTo(depth, CV_32F, 1.0 / kDepthFactor);
+    system.processFrame(static_cast<int>(k), path[k].timestamp, renderer.render(path[k].T_wc), depth);
   }
 }
 

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "system_test_support.hpp"
 #include "test_support.hpp"
 #include "vslam/eval/ate.hpp"
 #include "vslam/map_io/map_database.hpp"
@@ -36,8 +37,7 @@ void continueTheRoomLoop(bool deterministic) {
   long loaded_last_keyframe = -1;
   {
     System first(config, options);
-    for (size_t k = 0; k < half; ++k)
-      first.processFrame(static_cast<int>(k), path[k].timestamp, renderer.render(path[k].T_wc));
+    test::feedRoom(first, renderer, path, false, 0, half);
     first.finish();
     ASSERT_GE(first.stats().frames_tracked, 0.97 * half);
     first.saveMap(map_file, "room loop, first half");
@@ -48,8 +48,7 @@ void continueTheRoomLoop(bool deterministic) {
   System second(config, options);
   const std::pair<int, int> loaded = second.loadMap(map_file, false);
   EXPECT_EQ(static_cast<size_t>(loaded.first), readMapCounts(map_file).keyframes);
-  for (size_t k = half; k < path.size(); ++k)
-    second.processFrame(static_cast<int>(k), path[k].timestamp, renderer.render(path[k].T_wc));
+  test::feedRoom(second, renderer, path, false, half);
   second.finish();
 
   const SystemStats stats = second.stats();

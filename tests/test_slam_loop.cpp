@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "system_test_support.hpp"
 #include "test_support.hpp"
 #include "vslam/eval/ate.hpp"
 #include "vslam/io/sequence.hpp"
@@ -225,8 +226,7 @@ TEST(SlamLoop, FramesFollowTheFinalMap) {
   config.camera = room.camera;
   config.detector.model = "none";
   System system(config, SystemOptions());
-  for (size_t k = 0; k < path.size(); ++k)
-    system.processFrame(static_cast<int>(k), path[k].timestamp, renderer.render(path[k].T_wc));
+  test::feedRoom(system, renderer, path);
   system.finish();
   ASSERT_GE(system.stats().frames_tracked, 190);
   const double keyframes = ate(system.keyframeTrajectory(), path).rmse_m;

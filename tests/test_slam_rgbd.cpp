@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "sequence_test_support.hpp"
+#include "system_test_support.hpp"
 #include "test_support.hpp"
 #include "vslam/core/config.hpp"
 #include "vslam/eval/ate.hpp"
@@ -155,12 +156,7 @@ TEST(SlamRgbd, RoomWithExactDepthIsMetric) {
   config.camera = room.camera;
   ASSERT_GT(config.camera.bf, 0);
   System system(config, SystemOptions());
-  for (size_t k = 0; k < path.size(); ++k) {
-    const cv::Mat image = renderer.render(path[k].T_wc);
-    cv::Mat depth;
-    encodeTumDepth(renderer.renderDepth(path[k].T_wc), 5000.0).convertTo(depth, CV_32F, 1.0 / 5000.0);
-    system.processFrame(static_cast<int>(k), path[k].timestamp, image, depth);
-  }
+  test::feedRoom(system, renderer, path, /*with_depth=*/true);
   system.finish();
   EXPECT_EQ(system.stats().initialised_at_index, 0);
   EXPECT_GE(system.stats().frames_tracked, static_cast<int>(path.size()) - 1);

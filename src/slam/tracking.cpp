@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <future>
+#include <map>
 
 #include <opencv2/calib3d.hpp>
 
@@ -920,20 +920,22 @@ void Tracking::recordMatches(const Frame& frame, FrameRecord& record) const {
 // Returns false when fewer than 30 matches or inliers remain.
 static bool refineFramePose(const PinholeCamera& camera, FrameRecord& record) {
   constexpr size_t kMinMatches = 30;
+  std::vector<FrameRecord::Match> matches;
+  matches.swap(record.matches);  // the record's are freed whatever happens below
+  if (!record.tracked || !record.reference || matches.size() < kMinMatches) return false;
   std::vector<Vec3> points_w;
   std::vector<Observation2D> observations;
-  for (const FrameRecord::Match& match : record.matches) {
+  for (const FrameRecord::Match& match : matches) {
     MapPoint* point = match.point;
     // A few hops at most; the bound only guards against a cycle.
     for (int hop = 0; hop < 16 && point->replacement(); ++hop) point = point->replacement();
     if (point->isBad()) continue;
-    observations.push_back({static_cast<int>(points_w.size()), match.pixel.cast<double>(), match.inv_sigma2,
-                            std::isnan(match.u_right) ? kNoRightCoordinate : double(match.u_right)});
+    // A NaN u_right (monocular) stays NaN, kNoRightCoordinate, as a double.
+    observations.push_back(
+        {static_cast<int>(points_w.size()), match.pixel.cast<double>(), match.inv_sigma2, double(match.u_right)});
     points_w.push_back(point->position());
   }
-  record.matches.clear();
-  record.matches.shrink_to_fit();
-  if (!record.tracked || !record.reference || observations.size() < kMinMatches) return false;
+  if (observations.size() < kMinMatches) return false;
   KeyFrame* live = nullptr;
   const SE3 T_cw = poseThroughReference(record.reference, record.T_c_ref, &live);
   const PoseOptimizationResult result = optimizePose(camera, camera.bf, T_cw, points_w, observations);

@@ -3,6 +3,7 @@
 // from two views, then tracks with a constant-velocity model (falling back to
 // the reference keyframe), refines against the local map, and decides when a
 // new keyframe is needed (the paper's rules).
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -64,7 +65,7 @@ struct FrameRecord {
     MapPoint* point = nullptr;
     Eigen::Vector2f pixel = Eigen::Vector2f::Zero();  // undistorted
     float inv_sigma2 = 1.0f;
-    float u_right = 0.0f;  // NaN: monocular
+    float u_right = std::numeric_limits<float>::quiet_NaN();  // NaN: monocular
   };
   std::vector<Match> matches;
 };

@@ -316,6 +316,37 @@ TEST(CliEval, WritesJsonWithTheFiguresOfComputeAte) {
   EXPECT_GT(expected.rmse_m, 0.1);
 }
 
+// --offset, as evaluate_ate.py's: the ground truth restamped 0.3 s early pairs
+// each pose with the one 0.3 s before it, and the offset pairs them again.
+TEST(CliEval, OffsetShiftsTheEstimatesTimestamps) {
+  const fs::path dir = test::scratchDir("cli_eval_offset");
+  const std::string gt = (test::tumSequence("freiburg1_xyz") / "groundtruth.txt").string();
+  std::vector<StampedPose> early = readTumTrajectory(gt);
+  for (StampedPose& pose : early) pose.timestamp -= 0.3;
+  const std::string est = (dir / "early.txt").string();
+  writeTumTrajectory(est, early);
+  const std::string json_path = (dir / "ate.json").string();
+
+  const Outcome plain = vslam("eval --est " + quoted(est) + " --gt " + quoted(gt) + " --json " + quoted(json_path));
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_GT(nlohmann::json::parse(slurp(json_path))["rmse_m"].get<double>(), 0.01);
+
+  const Outcome shifted =
+      vslam("eval --est " + quoted(est) + " --gt " + quoted(gt) + " --offset 0.3 --json " + quoted(json_path));
+  ASSERT_EQ(shifted.exit_code, 0) << shifted.err;
+  EXPECT_TRUE(contains(shifted.out, "estimate timestamps shifted by 0.300000 s (--offset)")) << shifted.out;
+  EXPECT_TRUE(contains(shifted.out, "ATE (se3 alignment, 3000 pairs of 3000 estimated poses): rmse 0.000000 m"))
+      << shifted.out;
+  const nlohmann::json json = nlohmann::json::parse(slurp(json_path));
+  EXPECT_LT(json["rmse_m"].get<double>(), 1e-7);
+  EXPECT_DOUBLE_EQ(json["time_offset_s"].get<double>(), 0.3);
+
+  const std::string poses = (test::sharedData() / "kitti" / "poses" / "00.txt").string();
+  const Outcome kitti = vslam("eval --format kitti --offset 0.1 --est " + quoted(poses) + " --gt " + quoted(poses));
+  EXPECT_EQ(kitti.exit_code, 2);
+  EXPECT_TRUE(contains(kitti.err, "--offset shifts timestamps; --format kitti pairs by frame")) << kitti.err;
+}
+
 TEST(CliEval, KittiFormatPairsByLine) {
   const std::string poses = (test::sharedData() / "kitti" / "poses" / "00.txt").string();
   const Outcome eval = vslam("eval --format kitti --est " + quoted(poses) + " --gt " + quoted(poses));

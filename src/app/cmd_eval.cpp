@@ -29,6 +29,7 @@ struct EvalOptions {
   std::string format = "tum";
   std::string json_path;
   double max_dt = 0.02;
+  double time_offset_s = 0.0;  // added to the estimate's timestamps, as evaluate_ate.py's --offset
   double rpe_delta = 0.0;  // 0 = 1 s (TUM) or 100 m (KITTI)
   bool kitti_metrics = false;
   std::vector<double> kitti_lengths;  // empty: the benchmark's 100, 200, ..., 800 m
@@ -189,6 +190,11 @@ int run(const EvalOptions& options) {
   const TrajectoryFile estimate_file = readTrajectory(options.estimate_path, options.format);
   const TrajectoryFile groundtruth_file = readTrajectory(options.groundtruth_path, options.format);
   std::vector<StampedPose> estimate = estimate_file.poses, groundtruth = groundtruth_file.poses;
+  if (options.time_offset_s != 0.0) {
+    if (kitti) throw InputError("--offset shifts timestamps; --format kitti pairs by frame and has none");
+    for (StampedPose& pose : estimate) pose.timestamp += options.time_offset_s;
+    std::cout << "estimate timestamps shifted by " << number(options.time_offset_s) << " s (--offset)\n";
+  }
   if (kitti) {
     estimate.clear();
     groundtruth.clear();
@@ -248,6 +254,7 @@ int run(const EvalOptions& options) {
     json["alignment"] = toString(ate_options.alignment);
     json["estimate"] = options.estimate_path;
     json["groundtruth"] = options.groundtruth_path;
+    json["time_offset_s"] = options.time_offset_s;
     nlohmann::json rpe_json = toJson(rpe);
     rpe_json["delta"] = rpe_options.delta;
     json["rpe"] = rpe_json;
@@ -283,6 +290,11 @@ Command addEvalCommand(CLI::App& app) {
   cli->add_option("--json", options->json_path, "Also write the figures to this JSON file (default: none)");
   cli->add_option("--max-dt", options->max_dt, "Largest timestamp difference of a pair, seconds (tum format)")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cli->add_option("--offset", options->time_offset_s,
+                  "Seconds added to the estimate's timestamps before pairing (tum format), as the TUM "
+                  "benchmark's evaluate_ate.py --offset: for a camera whose timestamps are known to be off "
+                  "its ground truth's clock. Scores at 0 are the ones to quote")
       ->capture_default_str();
   cli->add_option("--rpe-delta", options->rpe_delta,
                   "RPE interval: seconds (tum) or metres (kitti); 0 = 1 s for tum, 100 m for kitti")

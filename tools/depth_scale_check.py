@@ -166,17 +166,37 @@ def main():
             depth_of[name] = raw.astype(np.float64) / args.depth_factor
         return depth_of[name]
 
-    def pairs_at(offset):
-        """(colour i, colour j, depth i, T_ji) for each pair start, ground truth looked up at t + offset."""
-        frames = [(name, depth_name, gt.camera_to_world(t + offset)) for t, name, depth_name in paired]
-        frames = [f for f in frames if f[2] is not None]
-        pairs = []
+    # The frame pairs are chosen once, from the ground truth at the colour
+    # frames' own times: every clock offset tried below is then judged on the
+    # same pairs and the same matches.
+    def choose_pairs():
+        """(t_i, t_j, colour i, colour j, depth i) for each pair start."""
+        frames = [(t, name, depth_name, gt.camera_to_world(t)) for t, name, depth_name in paired]
+        frames = [f for f in frames if f[3] is not None]
+        chosen = []
         for i in range(0, len(frames), args.stride):
-            Ti = frames[i][2]
+            centre_i = frames[i][3][:3, 3]
             j = next((j for j in range(i + 1, len(frames))
-                      if np.linalg.norm(frames[j][2][:3, 3] - Ti[:3, 3]) >= args.min_baseline), None)
+                      if np.linalg.norm(frames[j][3][:3, 3] - centre_i) >= args.min_baseline), None)
             if j is not None:
-                pairs.append((frames[i][0], frames[j][0], frames[i][1], np.linalg.inv(frames[j][2]) @ Ti))
+                chosen.append((frames[i][0], frames[j][0], frames[i][1], frames[j][1], frames[i][2]))
+        return chosen
+
+    frame_pairs = choose_pairs()
+    if not paired:
+        fail(f'{args.seq}: no colour frame in rgb.txt has a depth image in depth.txt within 20 ms')
+    if not frame_pairs:
+        fail(f'{args.seq}: no two frames with ground truth at their times are --min-baseline '
+             f'{args.min_baseline} m apart (colour frames {paired[0][0]:.3f}-{paired[-1][0]:.3f} s, ground truth '
+             f'{gt.times[0]:.3f}-{gt.times[-1]:.3f} s, gaps over {1000 * gt.max_gap:.0f} ms not bridged)')
+
+    def pairs_at(offset):
+        """(colour i, colour j, depth i, T_ji) for each chosen pair, ground truth looked up at t + offset."""
+        pairs = []
+        for t_i, t_j, name_i, name_j, depth_name in frame_pairs:
+            T_i, T_j = gt.camera_to_world(t_i + offset), gt.camera_to_world(t_j + offset)
+            if T_i is not None and T_j is not None:
+                pairs.append((name_i, name_j, depth_name, np.linalg.inv(T_j) @ T_i))
         return pairs
 
     def epipolar_distances(a, b, T_ji):
@@ -186,24 +206,26 @@ def main():
         lines = np.hstack([a, np.ones((len(a), 1))]) @ F.T  # epipolar lines in image j
         return np.abs(np.sum(lines * np.hstack([b, np.ones((len(b), 1))]), axis=1)) / np.linalg.norm(lines[:, :2], axis=1)
 
+    # The matches the offsets are judged on: those within 5 --max-epipolar of
+    # their epipolar line at offset 0 (the rest are wrong matches at any offset).
+    judged = {}
+    for name_i, name_j, _, T_ji in pairs_at(0.0):
+        a, b = matched(name_i, name_j)
+        if len(a):
+            keep = epipolar_distances(a, b, T_ji) < 5 * args.max_epipolar
+            if keep.any():
+                judged[(name_i, name_j)] = (a[keep], b[keep])
+
     def median_epipolar(offset):
         distances = []
         for name_i, name_j, _, T_ji in pairs_at(offset):
-            a, b = matched(name_i, name_j)
-            if len(a):
-                d = epipolar_distances(a, b, T_ji)
-                distances.extend(d[d < 5 * args.max_epipolar])
+            if (name_i, name_j) in judged:
+                distances.extend(epipolar_distances(*judged[(name_i, name_j)], T_ji))
         return np.median(distances) if distances else np.inf
 
     # Colour and motion-capture clocks differ by a few milliseconds; at 1 m/s
     # that moves a 0.2 m baseline by 5 %. The offset that best fits the
     # epipolar geometry of all matches is taken (a grid of 2.5 ms).
-    if not paired:
-        fail(f'{args.seq}: no colour frame in rgb.txt has a depth image in depth.txt within 20 ms')
-    if not pairs_at(0.0):
-        fail(f'{args.seq}: no two frames with ground truth at their times are --min-baseline '
-             f'{args.min_baseline} m apart (colour frames {paired[0][0]:.3f}-{paired[-1][0]:.3f} s, ground truth '
-             f'{gt.times[0]:.3f}-{gt.times[-1]:.3f} s, gaps over {1000 * gt.max_gap:.0f} ms not bridged)')
     if args.time_offset == 'auto':
         grid = [k * 0.0025 for k in range(-12, 13)]
         scores = [median_epipolar(offset) for offset in grid]

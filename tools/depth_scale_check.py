@@ -15,7 +15,7 @@ vslam pairs them; in fast motion that adds noise to the ratios.
   tools/depth_scale_check.py --seq ../shared/data/tum/rgbd_dataset_freiburg3_teddy \
       --intrinsics 535.4 539.2 320.1 247.6
 
-Needs python3-numpy and python3-opencv (Debian packages).
+Needs python3-numpy and python3-opencv (Debian packages; tools/setup.sh installs them).
 """
 import argparse
 import bisect

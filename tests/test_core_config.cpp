@@ -142,6 +142,23 @@ TEST(Config, RgbdWithoutBfNamesTheKeyAsTheFileSpellsIt) {
   EXPECT_NE(errorOf(negative).find("bf must be >= 0"), std::string::npos) << errorOf(negative);
 }
 
+// camera.readout_s: the rolling shutter's readout (docs/GEOMETRY.md); 0, a
+// global shutter, unless a file says otherwise, and never negative.
+TEST(Config, ReadsTheRollingShutterReadout) {
+  const std::string camera = "camera:\n  width: 640\n  height: 480\n  fx: 500\n  fy: 500\n  cx: 320\n  cy: 240\n";
+  EXPECT_DOUBLE_EQ(loadConfig(writeFile("global_shutter.yaml", camera)).camera.readout_s, 0.0);
+  EXPECT_DOUBLE_EQ(loadConfig(writeFile("rolling_shutter.yaml", camera + "  readout_s: 0.025\n")).camera.readout_s,
+                   0.025);
+  const std::string negative = writeFile("negative_readout.yaml", camera + "  readout_s: -0.01\n");
+  EXPECT_NE(errorOf(negative).find(negative + ":8: camera readout_s must be in [0, 1) seconds"), std::string::npos)
+      << errorOf(negative);
+  // The shipped values, each the readout with the least reprojection error on its camera's sequence.
+  EXPECT_DOUBLE_EQ(loadConfig(projectConfigDir() + "/tum_fr1.yaml").camera.readout_s, 0.025);
+  EXPECT_DOUBLE_EQ(loadConfig(projectConfigDir() + "/tum_fr3.yaml").camera.readout_s, 0.020);
+  EXPECT_DOUBLE_EQ(loadConfig(projectConfigDir() + "/bonn.yaml").camera.readout_s, 0.010);
+  EXPECT_DOUBLE_EQ(loadConfig(projectConfigDir() + "/kitti_00-02.yaml").camera.readout_s, 0.0);  // global shutter
+}
+
 TEST(Config, OrbSlam2SettingsMissingKeyIsNamed) {
   const std::string path = writeFile("bad_orbslam.yaml", "%YAML:1.0\nCamera.fx: 517.3\nCamera.cx: 318.6\nCamera.cy: 255.3\n");
   const std::string message = errorOf(path);

@@ -730,6 +730,13 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
                               {"parked", stats.moving_boxes_parked},
                               {"undecided", stats.moving_boxes_undecided},
                               {"map_points_retired", stats.moving_points_retired}};
+  // Frames posed again after the final BA (loop.refine_frames), with the mean
+  // chi-square reprojection error of their inlier matches: what
+  // camera.readout_s is calibrated by (docs/GEOMETRY.md, "Rolling shutter").
+  report["frames_posed_again"] = {{"frames", stats.frames_posed_again},
+                                  {"inlier_matches", stats.refined_inlier_matches},
+                                  {"mean_chi2", stats.refined_mean_chi2},
+                                  {"readout_s", sequence.config.camera.readout_s}};
   // Where each loop closed: the two keyframes' timestamps (loop keyframes are never culled).
   std::map<long, double> keyframe_timestamp;
   for (const ExportedKeyFrame& keyframe : system.keyFrames()) keyframe_timestamp[keyframe.id] = keyframe.timestamp;

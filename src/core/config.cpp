@@ -115,8 +115,12 @@ Config loadVslamYaml(const std::string& text, const std::string& path) {
   reader.optional(cam, "camera", "bf", c.bf);
   reader.optional(cam, "camera", "th_depth", c.th_depth);
   reader.optional(cam, "camera", "max_depth_m", c.max_depth_m);
+  reader.optional(cam, "camera", "readout_s", c.readout_s);
   if (c.bf < 0 || c.th_depth <= 0 || c.max_depth_m <= 0)
     throw InputError(path, cam.Mark().line + 1, "camera bf must be >= 0, th_depth and max_depth_m > 0");
+  if (!(c.readout_s >= 0 && c.readout_s < 1))  // only a value in the file can be out of range
+    throw InputError(path, cam["readout_s"].Mark().line + 1,
+                     "camera readout_s must be in [0, 1) seconds (0: global shutter)");
   if (c.width <= 0 || c.height <= 0 || c.fx <= 0 || c.fy <= 0)
     throw InputError(path, cam.Mark().line + 1, "camera width, height, fx and fy must be positive");
 

@@ -139,11 +139,19 @@ bool System::finish(const FinishOptions& finish_options) {
   // Frames were posed against the map as it stood when they were tracked;
   // since then bundle adjustments have moved it (a young monocular map's scale
   // most of all), so each is posed again against its matched points. Only
-  // after a final BA that was merged: a run stopped early ends quickly.
-  if (merged && config_.loop.refine_frames) {
+  // after a final BA that was merged: a run stopped early ends quickly. In
+  // localisation mode the map has not moved, and frames are posed again only
+  // for a rolling shutter's correction (docs/GEOMETRY.md).
+  const bool stopped = finish_options.abort_final_ba && finish_options.abort_final_ba->load();
+  const bool localised_rolling_shutter = localize_ && config_.camera.readout_s > 0 && !stopped;
+  if ((merged || localised_rolling_shutter) && config_.loop.refine_frames) {
     ScopedStage stage(&timer_, "refine_frames");
     std::lock_guard<std::mutex> lock(map_->mutex());
-    spdlog::info("frames posed again in the final map: {}", tracking_->refineFramePoses(config_.camera));
+    const Tracking::FrameRefinement refinement = tracking_->refineFramePoses(config_.camera);
+    frames_posed_again_ = refinement.frames;
+    refined_inlier_matches_ = refinement.inlier_matches;
+    refined_chi2_ = refinement.chi2;
+    spdlog::info("frames posed again in the final map: {}", refinement.frames);
   }
   return merged;
 }
@@ -240,6 +248,9 @@ SystemStats System::stats() const {
   stats.moving_boxes_parked = moving.parked;
   stats.moving_boxes_undecided = moving.undecided;
   stats.moving_points_retired = moving.points_retired;
+  stats.frames_posed_again = frames_posed_again_;
+  stats.refined_inlier_matches = refined_inlier_matches_;
+  stats.refined_mean_chi2 = refined_inlier_matches_ > 0 ? refined_chi2_ / refined_inlier_matches_ : 0.0;
   if (loop_closing_) stats.implausible_loops_rejected = loop_closing_->implausibleLoopsRejected();
   if (loaded_max_keyframe_id_ >= 0) {
     stats.frames_in_loaded_map = 0;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <future>
 #include <map>
+#include <optional>
 
 #include <opencv2/calib3d.hpp>
 
@@ -12,9 +13,11 @@
 
 #include "vslam/feature/matcher.hpp"
 #include "vslam/geometry/pnp.hpp"
+#include "vslam/geometry/rolling_shutter.hpp"
 #include "vslam/geometry/two_view_initializer.hpp"
 #include "vslam/optimize/bundle_adjuster.hpp"
 #include "vslam/optimize/pose_optimizer.hpp"
+#include "vslam/optimize/reprojection.hpp"
 #include "vslam/place/keyframe_database.hpp"
 #include "vslam/place/vocabulary.hpp"
 #include "vslam/slam/local_mapping.hpp"
@@ -216,9 +219,11 @@ bool Tracking::track(Frame& frame) {
     record.reference = reference_keyframe_;
     record.T_c_ref = frame.T_cw * reference_keyframe_->pose().inverse();
     record.by_odometry = odometry_only_;
-    // Not in localisation mode: the map does not change there, and odometry
-    // points are freed a frame later.
-    if (!keyframe_made && config_.loop.refine_frames && !localization_only_) recordMatches(frame, record);
+    // In localisation mode the map does not change, so the matches are only
+    // kept for a rolling shutter's correction (System::finish).
+    const bool keep_matches =
+        config_.loop.refine_frames && (!localization_only_ || config_.camera.readout_s > 0);
+    if (!keyframe_made && keep_matches) recordMatches(frame, record);
   }
   records_.push_back(std::move(record));
   // Early failure: a map just initialised (a few keyframes) is not worth
@@ -908,6 +913,8 @@ void Tracking::recordMatches(const Frame& frame, FrameRecord& record) const {
   const std::vector<bool> for_pose = matchesForPose(frame);
   for (size_t i = 0; i < frame.size(); ++i) {
     if (!for_pose[i] || frame.outlier[i]) continue;
+    // Localisation's odometry points belong to no keyframe and are freed a frame later.
+    if (localization_only_ && frame.map_points[i]->observationCount() == 0) continue;
     record.matches.push_back({frame.map_points[i], frame.point(i).cast<float>(),
                               static_cast<float>(frame.pyramid->inv_sigma2[frame.keypoints[i].octave]),
                               static_cast<float>(frame.rightCoordinate(i))});
@@ -917,8 +924,12 @@ void Tracking::recordMatches(const Frame& frame, FrameRecord& record) const {
 // One frame: its matches' points as the map now holds them (fused points
 // followed to the point that took their observations, culled ones left out),
 // and the pose optimisation Tracking uses, from the frame's current pose.
-// Returns false when fewer than 30 matches or inliers remain.
-static bool refineFramePose(const PinholeCamera& camera, FrameRecord& record) {
+// With a rolling shutter (camera.readout_s > 0) each match is corrected for
+// its row's time at the camera's `velocity`, twice (the correction is exact
+// at the pose it is computed from). Returns false when fewer than 30 matches
+// or inliers remain.
+static bool refineFramePose(const PinholeCamera& camera, const CameraVelocity& velocity, FrameRecord& record,
+                            Tracking::FrameRefinement& refinement) {
   constexpr size_t kMinMatches = 30;
   std::vector<FrameRecord::Match> matches;
   matches.swap(record.matches);  // the record's are freed whatever happens below
@@ -937,29 +948,71 @@ static bool refineFramePose(const PinholeCamera& camera, FrameRecord& record) {
   }
   if (observations.size() < kMinMatches) return false;
   KeyFrame* live = nullptr;
-  const SE3 T_cw = poseThroughReference(record.reference, record.T_c_ref, &live);
-  const PoseOptimizationResult result = optimizePose(camera, camera.bf, T_cw, points_w, observations);
+  PoseOptimizationResult result;
+  result.T_cw = poseThroughReference(record.reference, record.T_c_ref, &live);
+  const int passes = camera.readout_s > 0 ? 2 : 1;
+  std::vector<Vec3> seen_w = points_w;
+  for (int pass = 0; pass < passes; ++pass) {
+    // The undistorted row stands in for the sensor row (they differ by a few
+    // pixels but near the corners).
+    if (camera.readout_s > 0)
+      for (const Observation2D& observation : observations)
+        seen_w[observation.point] = pointSeenAtRowTime(result.T_cw, points_w[observation.point], velocity,
+                                                       rowTime(observation.pixel.y(), camera.height, camera.readout_s));
+    result = optimizePose(camera, camera.bf, result.T_cw, seen_w, observations);
+  }
   if (result.n_inliers < static_cast<int>(kMinMatches)) return false;
+  const ProjectionModel model(camera, camera.bf);
+  for (size_t o = 0; o < observations.size(); ++o) {
+    if (!result.inlier[o]) continue;
+    const Observation2D& observation = observations[o];
+    refinement.chi2 += checkReprojection(model, result.T_cw, seen_w[observation.point], observation.pixel,
+                                         observation.u_right, observation.inv_sigma2)
+                           .chi2;
+    ++refinement.inlier_matches;
+  }
+  ++refinement.frames;
   record.reference = live;
   record.T_c_ref = result.T_cw * live->pose().inverse();
   return true;
 }
 
-int Tracking::refineFramePoses(const PinholeCamera& camera) {
+Tracking::FrameRefinement Tracking::refineFramePoses(const PinholeCamera& camera) {
   // The other threads have stopped and the caller holds the map lock, so the
   // map is only read here: the frames are split between this thread and one
   // more (map.hpp).
+  // A rolling shutter needs each frame's velocity: from its neighbours' poses
+  // as the final map places them, before any is changed here.
+  std::vector<CameraVelocity> velocities(records_.size());
+  if (camera.readout_s > 0) {
+    std::vector<std::optional<SE3>> poses(records_.size());
+    for (size_t k = 0; k < records_.size(); ++k)
+      if (records_[k].tracked && records_[k].reference)
+        poses[k] = poseThroughReference(records_[k].reference, records_[k].T_c_ref);
+    for (size_t k = 0; k < records_.size(); ++k) {
+      // Central where both neighbours are posed, else one-sided, else standing still.
+      const size_t before = k > 0 && poses[k - 1] ? k - 1 : k;
+      const size_t after = k + 1 < records_.size() && poses[k + 1] ? k + 1 : k;
+      const double dt = records_[after].timestamp - records_[before].timestamp;
+      if (poses[before] && poses[after] && dt > 0)
+        velocities[k] = velocityBetween(*poses[before], *poses[after], dt);
+    }
+  }
   auto refineRange = [&](size_t begin, size_t end) {
-    int refined = 0;
-    for (size_t k = begin; k < end; ++k) refined += refineFramePose(camera, records_[k]) ? 1 : 0;
-    return refined;
+    FrameRefinement refinement;
+    for (size_t k = begin; k < end; ++k) refineFramePose(camera, velocities[k], records_[k], refinement);
+    return refinement;
   };
   const size_t half = records_.size() / 2;
   // std::async: an exception on either half reaches the caller (the future
   // waits for its thread), instead of terminating the process.
-  std::future<int> second_half = std::async(std::launch::async, refineRange, half, records_.size());
-  const int first = refineRange(0, half);
-  return first + second_half.get();
+  std::future<FrameRefinement> second_half = std::async(std::launch::async, refineRange, half, records_.size());
+  FrameRefinement total = refineRange(0, half);
+  const FrameRefinement second = second_half.get();
+  total.frames += second.frames;
+  total.inlier_matches += second.inlier_matches;
+  total.chi2 += second.chi2;
+  return total;
 }
 
 void Tracking::resetMap() {

@@ -27,6 +27,10 @@ struct PinholeCamera {
   double th_depth = 40.0;
   // Depth readings beyond this (metres) are dropped: the keypoint stays monocular.
   double max_depth_m = 10.0;
+  // Rolling shutter: seconds from the first row's exposure to the last row's
+  // (0: a global shutter). Used when frames are posed again after the final
+  // BA (docs/GEOMETRY.md, "Rolling shutter").
+  double readout_s = 0.0;
 
   double baseline() const { return fx > 0 ? bf / fx : 0.0; }
   // Depth below which a point counts as close (ORB-SLAM2's mThDepth).

@@ -87,6 +87,11 @@ struct SystemStats {
   // The motion check of --moving-classes boxes (all 0 without it).
   int moving_boxes_checked = 0, moving_boxes_moving = 0, moving_boxes_parked = 0, moving_boxes_undecided = 0;
   int moving_points_retired = 0;
+  // Frames posed again after the final BA (loop.refine_frames), and the mean
+  // chi-square reprojection error of their inlier matches there (0 when none).
+  int frames_posed_again = 0;
+  long refined_inlier_matches = 0;
+  double refined_mean_chi2 = 0;
 };
 
 // The detector's part of a run, for report.json's "detector".
@@ -194,6 +199,10 @@ class System {
   long loaded_max_keyframe_id_ = -1;  // keyframes up to this id came from a loaded map
   bool localize_ = false;             // loaded with localize: the map is never changed
   int frames_without_depth_ = 0;
+  // What posing the frames again after the final BA found (System::finish).
+  int frames_posed_again_ = 0;
+  long refined_inlier_matches_ = 0;
+  double refined_chi2_ = 0;
   bool finished_ = false;
   // Keypoint filter outcome per frame (Tracking's thread only).
   std::vector<int> keypoints_added_, keypoints_removed_, boxes_used_, keypoints_reused_, duplicates_dropped_;

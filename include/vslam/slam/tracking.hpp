@@ -116,8 +116,15 @@ class Tracking {
   TrackingState state() const { return state_; }
   // After the final BA (the map lock held, the other threads stopped): poses
   // each tracked frame again against the points it matched, where the map now
-  // holds them. Returns how many frames were moved.
-  int refineFramePoses(const PinholeCamera& camera);
+  // holds them. Says how many frames were moved, and the reprojection error
+  // of their inlier matches at the new poses (what calibrates
+  // camera.readout_s: docs/GEOMETRY.md, "Rolling shutter").
+  struct FrameRefinement {
+    int frames = 0;
+    long inlier_matches = 0;
+    double chi2 = 0;  // summed over those matches
+  };
+  FrameRefinement refineFramePoses(const PinholeCamera& camera);
   const std::vector<FrameRecord>& records() const { return records_; }
   int initialisedAtIndex() const { return initialised_at_index_; }
   // Why the last attempt to start a map failed ("frame 15 against frame 0:

@@ -17,14 +17,14 @@ namespace {
 
 SE3 exampleMotion() { return SE3(test::rotationDeg(2.0, Vec3(0.2, 1, -0.3)), Vec3(0.01, -0.004, 0.006)); }
 
-TEST(RollingShutter, RowTimeRunsFromMinusHalfToPlusHalfTheReadout) {
+TEST(GeometryRollingShutter, RowTimeRunsFromMinusHalfToPlusHalfTheReadout) {
   EXPECT_DOUBLE_EQ(rowTime(0, 480, 0.03), -0.015);
   EXPECT_DOUBLE_EQ(rowTime(240, 480, 0.03), 0.0);
   EXPECT_DOUBLE_EQ(rowTime(480, 480, 0.03), 0.015);
   EXPECT_DOUBLE_EQ(rowTime(120, 480, 0.0), 0.0);  // global shutter
 }
 
-TEST(RollingShutter, VelocityBetweenTwoPosesIsTheirMotionPerSecond) {
+TEST(GeometryRollingShutter, VelocityBetweenTwoPosesIsTheirMotionPerSecond) {
   const SE3 before(test::rotationDeg(30, Vec3(1, 0.5, 0)), Vec3(0.3, -1, 2));
   const SE3 D = exampleMotion();
   const CameraVelocity velocity = velocityBetween(before, D * before, 0.05);
@@ -36,7 +36,7 @@ TEST(RollingShutter, VelocityBetweenTwoPosesIsTheirMotionPerSecond) {
   EXPECT_NEAR(still.angular.norm() + still.linear.norm(), 0, 1e-12);
 }
 
-TEST(RollingShutter, APointSeenAtTheVelocitysOwnIntervalIsWhereTheLaterPoseSeesIt) {
+TEST(GeometryRollingShutter, APointSeenAtTheVelocitysOwnIntervalIsWhereTheLaterPoseSeesIt) {
   const SE3 T_cw(test::rotationDeg(-20, Vec3(0, 1, 0.2)), Vec3(-0.5, 0.1, 1.5));
   const SE3 later = exampleMotion() * T_cw;
   const CameraVelocity velocity = velocityBetween(T_cw, later, 0.04);
@@ -52,7 +52,7 @@ TEST(RollingShutter, APointSeenAtTheVelocitysOwnIntervalIsWhereTheLaterPoseSeesI
 // row). Posed with each point corrected for its row's time, the frame comes
 // out at its middle row's pose; posed as if every row were seen at once, it
 // does not.
-TEST(RollingShutter, PosingARowByRowFrameRecoversItsMiddleRowPose) {
+TEST(GeometryRollingShutter, PosingARowByRowFrameRecoversItsMiddleRowPose) {
   PinholeCamera camera;
   camera.width = 640;
   camera.height = 480;

@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "geometry_synthetic.hpp"
-#include "vslam/core/camera.hpp"
+#include "optimize_synthetic.hpp"
 #include "vslam/geometry/rolling_shutter.hpp"
 #include "vslam/optimize/pose_optimizer.hpp"
 
@@ -53,13 +53,7 @@ TEST(GeometryRollingShutter, APointSeenAtTheVelocitysOwnIntervalIsWhereTheLaterP
 // out at its middle row's pose; posed as if every row were seen at once, it
 // does not.
 TEST(GeometryRollingShutter, PosingARowByRowFrameRecoversItsMiddleRowPose) {
-  PinholeCamera camera;
-  camera.width = 640;
-  camera.height = 480;
-  camera.fx = 525;
-  camera.fy = 525;
-  camera.cx = 319.5;
-  camera.cy = 239.5;
+  const PinholeCamera camera = test::syntheticCamera();
   const double readout_s = 0.03;
   const SE3 T_mid(test::rotationDeg(10, Vec3(0.1, 1, 0)), Vec3(0.2, -0.1, 0.5));
   // 0.5 m/s sideways and 30 deg/s about the vertical axis: a handheld sweep.

@@ -926,14 +926,14 @@ void Tracking::recordMatches(const Frame& frame, FrameRecord& record) const {
 // and the pose optimisation Tracking uses, from the frame's current pose.
 // With a rolling shutter (camera.readout_s > 0) each match is corrected for
 // its row's time at the camera's `velocity`, twice (the correction is exact
-// at the pose it is computed from). Returns false when fewer than 30 matches
-// or inliers remain.
-static bool refineFramePose(const PinholeCamera& camera, const CameraVelocity& velocity, FrameRecord& record,
+// at the pose it is computed from). A frame left with fewer than 30 matches
+// or inliers keeps its pose and is not counted in `refinement`.
+static void refineFramePose(const PinholeCamera& camera, const CameraVelocity& velocity, FrameRecord& record,
                             Tracking::FrameRefinement& refinement) {
   constexpr size_t kMinMatches = 30;
   std::vector<FrameRecord::Match> matches;
   matches.swap(record.matches);  // the record's are freed whatever happens below
-  if (!record.tracked || !record.reference || matches.size() < kMinMatches) return false;
+  if (!record.tracked || !record.reference || matches.size() < kMinMatches) return;
   std::vector<Vec3> points_w;
   std::vector<Observation2D> observations;
   for (const FrameRecord::Match& match : matches) {
@@ -946,7 +946,7 @@ static bool refineFramePose(const PinholeCamera& camera, const CameraVelocity& v
         {static_cast<int>(points_w.size()), match.pixel.cast<double>(), match.inv_sigma2, double(match.u_right)});
     points_w.push_back(point->position());
   }
-  if (observations.size() < kMinMatches) return false;
+  if (observations.size() < kMinMatches) return;
   KeyFrame* live = nullptr;
   PoseOptimizationResult result;
   result.T_cw = poseThroughReference(record.reference, record.T_c_ref, &live);
@@ -961,7 +961,7 @@ static bool refineFramePose(const PinholeCamera& camera, const CameraVelocity& v
                                                        rowTime(observation.pixel.y(), camera.height, camera.readout_s));
     result = optimizePose(camera, camera.bf, result.T_cw, seen_w, observations);
   }
-  if (result.n_inliers < static_cast<int>(kMinMatches)) return false;
+  if (result.n_inliers < static_cast<int>(kMinMatches)) return;
   const ProjectionModel model(camera, camera.bf);
   for (size_t o = 0; o < observations.size(); ++o) {
     if (!result.inlier[o]) continue;
@@ -974,7 +974,6 @@ static bool refineFramePose(const PinholeCamera& camera, const CameraVelocity& v
   ++refinement.frames;
   record.reference = live;
   record.T_c_ref = result.T_cw * live->pose().inverse();
-  return true;
 }
 
 Tracking::FrameRefinement Tracking::refineFramePoses(const PinholeCamera& camera) {
@@ -1008,10 +1007,7 @@ Tracking::FrameRefinement Tracking::refineFramePoses(const PinholeCamera& camera
   // waits for its thread), instead of terminating the process.
   std::future<FrameRefinement> second_half = std::async(std::launch::async, refineRange, half, records_.size());
   FrameRefinement total = refineRange(0, half);
-  const FrameRefinement second = second_half.get();
-  total.frames += second.frames;
-  total.inlier_matches += second.inlier_matches;
-  total.chi2 += second.chi2;
+  total += second_half.get();
   return total;
 }
 

@@ -123,6 +123,12 @@ class Tracking {
     int frames = 0;
     long inlier_matches = 0;
     double chi2 = 0;  // summed over those matches
+    FrameRefinement& operator+=(const FrameRefinement& other) {
+      frames += other.frames;
+      inlier_matches += other.inlier_matches;
+      chi2 += other.chi2;
+      return *this;
+    }
   };
   FrameRefinement refineFramePoses(const PinholeCamera& camera);
   const std::vector<FrameRecord>& records() const { return records_; }

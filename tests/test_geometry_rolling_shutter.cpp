@@ -31,6 +31,9 @@ TEST(GeometryRollingShutter, VelocityBetweenTwoPosesIsTheirMotionPerSecond) {
   const Eigen::AngleAxisd rotation(D.R);
   EXPECT_NEAR((velocity.angular - rotation.angle() / 0.05 * rotation.axis()).norm(), 0, 1e-12);
   EXPECT_NEAR((velocity.linear - D.t / 0.05).norm(), 0, 1e-12);
+  // Over its own interval the motion is D again.
+  const SE3 motion = motionOverRowTime(velocity, 0.05);
+  EXPECT_NEAR((motion.R - D.R).norm() + (motion.t - D.t).norm(), 0, 1e-12);
   // Standing still: no velocity.
   const CameraVelocity still = velocityBetween(before, before, 0.05);
   EXPECT_NEAR(still.angular.norm() + still.linear.norm(), 0, 1e-12);

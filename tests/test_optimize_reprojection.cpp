@@ -59,12 +59,18 @@ RowMajorMatrix analyticTangentJacobian(const ceres::CostFunction& cost, const ce
   return ambient * plus_jacobian;
 }
 
+// A rolling shutter's row motion (rolling_shutter.hpp): 1.5 degrees and 1 cm.
+const SE3 kRowMotion(test::rotationAbout(Vec3(0.1, 1, -0.2), 0.026), Vec3(0.01, -0.002, 0.003));
+
 template <int kResiduals>
-void checkJacobians(const ceres::Manifold& manifold) {
+void checkJacobians(const ceres::Manifold& manifold, bool with_row_motion = false) {
   const ProjectionModel m = model();
   const Vec3 p_c = kPose * kPointW;
   const Vec2 pixel = Vec2(m.fx * p_c.x() / p_c.z() + m.cx, m.fy * p_c.y() / p_c.z() + m.cy) + Vec2(3.0, -2.0);
-  const ReprojectionCost<kResiduals> cost(m, pixel, pixel.x() - m.bf / p_c.z() + 1.5, 0.7);
+  const double u_right = pixel.x() - m.bf / p_c.z() + 1.5;
+  const ReprojectionCost<kResiduals> cost =
+      with_row_motion ? ReprojectionCost<kResiduals>(m, pixel, u_right, 0.7, kRowMotion)
+                      : ReprojectionCost<kResiduals>(m, pixel, u_right, 0.7);
   const PoseParameters pose = poseToParameters(kPose);
   RowMajorMatrix d_point;
   const RowMajorMatrix d_pose = analyticTangentJacobian<kResiduals>(cost, manifold, pose, kPointW, &d_point);
@@ -89,6 +95,27 @@ TEST(Reprojection, StereoJacobiansMatchFiniteDifferences) { checkJacobians<3>(Po
 TEST(Reprojection, JacobiansThroughFixedNormManifold) {
   checkJacobians<2>(PoseFixedTranslationNormManifold());
   checkJacobians<3>(PoseFixedTranslationNormManifold());
+}
+
+TEST(Reprojection, JacobiansWithARollingShuttersRowMotion) {
+  checkJacobians<2>(PoseManifold(), true);
+  checkJacobians<3>(PoseManifold(), true);
+  checkJacobians<2>(PoseFixedTranslationNormManifold(), true);
+}
+
+// With a row motion the point is projected from row_motion * T_cw: the same
+// residual as a plain cost at that pose, and as checkReprojection gives there.
+TEST(Reprojection, RowMotionProjectsFromTheMovedPose) {
+  const ProjectionModel m = model();
+  const Vec2 pixel(300.0, 200.0);
+  const ReprojectionCost<3> moved(m, pixel, 290.0, 0.5, kRowMotion);
+  const ReprojectionCost<3> plain(m, pixel, 290.0, 0.5);
+  const PoseParameters pose = poseToParameters(kPose);
+  const PoseParameters moved_pose = poseToParameters(kRowMotion * kPose);
+  const Eigen::VectorXd r_moved = residualAt<3>(moved, pose.data(), kPointW.data());
+  EXPECT_LT((r_moved - residualAt<3>(plain, moved_pose.data(), kPointW.data())).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_GT((r_moved - residualAt<3>(plain, pose.data(), kPointW.data())).cwiseAbs().maxCoeff(), 1.0);
+  EXPECT_NEAR(r_moved.squaredNorm(), checkReprojection(m, kRowMotion * kPose, kPointW, pixel, 290.0, 0.5).chi2, 1e-9);
 }
 
 TEST(Reprojection, PoseOnlyCostMatchesTheFullCost) {

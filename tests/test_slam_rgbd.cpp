@@ -202,8 +202,11 @@ Fr1Run runFr1(const Sequence& sequence, SensorMode sensor, bool deterministic, s
 
 // The whole of fr1_xyz with depth, threaded and deterministic: every frame
 // that has a depth image is tracked, and the map is metric. Measured (docs/
-// BENCHMARKS.md) about 0.75 cm for keyframes and 0.97 cm for frames, scale
-// within 0.3 %; the bounds leave room for run-to-run spread.
+// BENCHMARKS.md, "Rolling shutter in the final BA") 0.32-0.38 cm for
+// keyframes and 0.48-0.51 cm for frames threaded, scale within 0.4 %; the
+// bounds are issue 13's targets (0.9 cm), which leave room for run-to-run
+// spread. Before the final BA modelled the rolling shutter the keyframes
+// were at 0.76-0.92 cm.
 TEST(SlamRgbd, Fr1XyzTracksEveryFrameWithDepthAtMetricScale) {
   const Sequence sequence = test::openSharedSequence("tum/fr1_xyz");
   std::set<int> with_depth;
@@ -218,8 +221,8 @@ TEST(SlamRgbd, Fr1XyzTracksEveryFrameWithDepthAtMetricScale) {
     for (int index : run.lost) EXPECT_FALSE(with_depth.count(index)) << "frame " << index << " has depth but was lost";
     const AteResult keyframes = ate(run.keyframes, sequence.groundtruth, Alignment::SE3);
     const AteResult frames = ate(run.frames, sequence.groundtruth, Alignment::SE3);
-    EXPECT_LT(keyframes.rmse_m, 0.012);
-    EXPECT_LT(frames.rmse_m, 0.012);
+    EXPECT_LT(keyframes.rmse_m, 0.009);
+    EXPECT_LT(frames.rmse_m, 0.009);
     EXPECT_NEAR(ate(run.keyframes, sequence.groundtruth, Alignment::Sim3).scale, 1.0, 0.02);
     EXPECT_EQ(run.loops, 0u) << "fr1_xyz never leaves its local map: a loop closed there is false";
   }

@@ -14,12 +14,15 @@ CameraVelocity velocityBetween(const SE3& T_cw_before, const SE3& T_cw_after, do
   return velocity;
 }
 
-Vec3 pointSeenAtRowTime(const SE3& T_cw, const Vec3& point_w, const CameraVelocity& velocity, double row_time) {
+SE3 motionOverRowTime(const CameraVelocity& velocity, double row_time) {
   const Vec3 rotation = row_time * velocity.angular;
   const double angle = rotation.norm();
   const Mat3 R = angle > 0 ? Eigen::AngleAxisd(angle, rotation / angle).toRotationMatrix() : Mat3::Identity();
-  const Vec3 seen = R * (T_cw * point_w) + row_time * velocity.linear;
-  return T_cw.inverse() * seen;
+  return SE3(R, row_time * velocity.linear);
+}
+
+Vec3 pointSeenAtRowTime(const SE3& T_cw, const Vec3& point_w, const CameraVelocity& velocity, double row_time) {
+  return T_cw.inverse() * (motionOverRowTime(velocity, row_time) * (T_cw * point_w));
 }
 
 }  // namespace vslam

@@ -90,17 +90,28 @@ BundleResult bundleAdjust(const PinholeCamera& camera, double bf, BundleProblem&
   points.reserve(problem.points.size());
   for (const BaPoint& point : problem.points) points.push_back(point.position_w);
 
-  auto chi2Of = [&](const BaObservation& obs) {
-    return checkReprojection(model, poseFromParameters(poses[obs.keyframe].data()), points[obs.point], obs.pixel,
+  // A rolling shutter: each observation's camera motion since the middle row.
+  std::vector<SE3> row_motion;
+  if (problem.readout_s > 0) {
+    row_motion.reserve(n_obs);
+    for (const BaObservation& obs : problem.observations)
+      row_motion.push_back(motionOverRowTime(problem.keyframes[obs.keyframe].velocity,
+                                             rowTime(obs.pixel.y(), camera.height, problem.readout_s)));
+  }
+  auto chi2Of = [&](size_t i) {
+    const BaObservation& obs = problem.observations[i];
+    const SE3 T_cw = poseFromParameters(poses[obs.keyframe].data());
+    return checkReprojection(model, row_motion.empty() ? T_cw : row_motion[i] * T_cw, points[obs.point], obs.pixel,
                              obs.u_right, obs.inv_sigma2);
   };
-  auto isOutlier = [&](const BaObservation& obs) {
-    const ReprojectionCheck check = chi2Of(obs);
+  auto isOutlier = [&](size_t i) {
+    const BaObservation& obs = problem.observations[i];
+    const ReprojectionCheck check = chi2Of(i);
     const double threshold = hasRightCoordinate(obs.u_right) ? options.chi2_stereo : options.chi2_mono;
     return !check.depth_positive || check.chi2 > threshold;
   };
   std::vector<double> initial_chi2(n_obs);
-  for (size_t i = 0; i < n_obs; ++i) initial_chi2[i] = chi2Of(problem.observations[i]).chi2;
+  for (size_t i = 0; i < n_obs; ++i) initial_chi2[i] = chi2Of(i).chi2;
 
   ceres::Problem::Options problem_options;
   problem_options.enable_fast_removal = options.remove_outliers;
@@ -119,13 +130,16 @@ BundleResult bundleAdjust(const PinholeCamera& camera, double bf, BundleProblem&
     const BaObservation& obs = problem.observations[i];
     double* pose = poses[obs.keyframe].data();
     double* point = points[obs.point].data();
+    ceres::CostFunction* cost = nullptr;
     if (!hasRightCoordinate(obs.u_right)) {
-      residual_ids[i] = ceres_problem.AddResidualBlock(
-          new ReprojectionCost<2>(model, obs.pixel, obs.u_right, obs.inv_sigma2), &loss_mono, pose, point);
+      cost = row_motion.empty() ? new ReprojectionCost<2>(model, obs.pixel, obs.u_right, obs.inv_sigma2)
+                                : new ReprojectionCost<2>(model, obs.pixel, obs.u_right, obs.inv_sigma2, row_motion[i]);
     } else {
-      residual_ids[i] = ceres_problem.AddResidualBlock(
-          new ReprojectionCost<3>(model, obs.pixel, obs.u_right, obs.inv_sigma2), &loss_stereo, pose, point);
+      cost = row_motion.empty() ? new ReprojectionCost<3>(model, obs.pixel, obs.u_right, obs.inv_sigma2)
+                                : new ReprojectionCost<3>(model, obs.pixel, obs.u_right, obs.inv_sigma2, row_motion[i]);
     }
+    residual_ids[i] = ceres_problem.AddResidualBlock(
+        cost, hasRightCoordinate(obs.u_right) ? &loss_stereo : &loss_mono, pose, point);
     ++residuals_of_keyframe[obs.keyframe];
     ++residuals_of_point[obs.point];
   }
@@ -200,7 +214,7 @@ BundleResult bundleAdjust(const PinholeCamera& camera, double bf, BundleProblem&
   if (options.remove_outliers && !result.aborted && options.iterations_second > 0) {
     for (size_t i = 0; i < n_obs; ++i) {
       const BaObservation& obs = problem.observations[i];
-      if (!isOutlier(obs)) continue;
+      if (!isOutlier(i)) continue;
       ceres_problem.RemoveResidualBlock(residual_ids[i]);
       // A block left without residuals would only be a null column for the solver.
       if (--residuals_of_keyframe[obs.keyframe] == 0) ceres_problem.RemoveParameterBlock(poses[obs.keyframe].data());
@@ -215,13 +229,12 @@ BundleResult bundleAdjust(const PinholeCamera& camera, double bf, BundleProblem&
 
   result.outlier.assign(n_obs, false);
   for (size_t i = 0; i < n_obs; ++i) {
-    const BaObservation& obs = problem.observations[i];
-    result.outlier[i] = isOutlier(obs);
+    result.outlier[i] = isOutlier(i);
     if (result.outlier[i]) {
       ++result.n_outliers;
     } else {
       result.initial_cost += 0.5 * initial_chi2[i];
-      result.final_cost += 0.5 * chi2Of(obs).chi2;
+      result.final_cost += 0.5 * chi2Of(i).chi2;
     }
   }
 

@@ -106,7 +106,8 @@ bool loopAccepted(double scale, int inliers, const LoopScaleRule& rule) {
 // Full bundle adjustment.
 
 FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations,
-                                                   const FullBundleAdjustmentControl& control) {
+                                                   const FullBundleAdjustmentControl& control,
+                                                   const RollingShutterMotion* shutter) {
   FullBundleAdjustmentResult summary;
   BundleProblem problem;
   std::vector<KeyFrame*> keyframes;
@@ -122,6 +123,12 @@ FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations,
       slot[kf] = static_cast<int>(problem.keyframes.size());
       // The first keyframe anchors the gauge (and, with the map's scale, the scale).
       problem.keyframes.push_back({kf->id(), kf->pose(), kf == keyframes.front()});
+      if (shutter && shutter->velocities.count(kf)) problem.keyframes.back().velocity = shutter->velocities.at(kf);
+    }
+    if (shutter) {
+      problem.readout_s = camera->readout_s;
+      if (shutter->rotation_only)
+        for (BaKeyframe& kf : problem.keyframes) kf.velocity.linear.setZero();
     }
     for (MapPoint* point : map.mapPoints()) {
       const size_t first_observation = problem.observations.size();

@@ -163,8 +163,14 @@ bool System::runFinalBundleAdjustment(const FinishOptions& finish_options) {
   frames_before_final_ba_ = frameTrajectory();
   keyframes_before_final_ba_ = keyframeTrajectory();
   ScopedStage stage(&timer_, "final_ba");
+  RollingShutterMotion shutter;
+  if (config_.camera.readout_s > 0) {
+    shutter.velocities = keyframeVelocities();
+    shutter.rotation_only = config_.sensor == SensorMode::Monocular;
+  }
   const FullBundleAdjustmentResult result =
-      runFullBundleAdjustment(*map_, config_.loop.final_ba_iterations, {finish_options.abort_final_ba, nullptr});
+      runFullBundleAdjustment(*map_, config_.loop.final_ba_iterations, {finish_options.abort_final_ba, nullptr},
+                              config_.camera.readout_s > 0 ? &shutter : nullptr);
   if (!result.merged) {
     if (finish_options.abort_final_ba && finish_options.abort_final_ba->load())
       spdlog::warn("final bundle adjustment stopped; the map is kept as it was before it");
@@ -175,6 +181,22 @@ bool System::runFinalBundleAdjustment(const FinishOptions& finish_options) {
   spdlog::info("final bundle adjustment: {} keyframes, {} points, cost {:.1f} -> {:.1f}", result.keyframes,
                result.points, result.initial_cost, result.final_cost);
   return true;
+}
+
+KeyFrameMap<CameraVelocity> System::keyframeVelocities() const {
+  KeyFrameMap<CameraVelocity> velocities;
+  std::lock_guard<std::mutex> lock(map_->mutex());
+  const std::vector<FrameRecord>& records = tracking_->records();
+  const std::vector<CameraVelocity> frame_velocities = tracking_->frameVelocities();
+  // A keyframe is the frame of its index and timestamp (a loaded map's
+  // keyframes come from another run's frames).
+  std::map<std::pair<int, double>, size_t> record_of_frame;
+  for (size_t k = 0; k < records.size(); ++k) record_of_frame[{records[k].index, records[k].timestamp}] = k;
+  for (KeyFrame* keyframe : map_->keyframes()) {
+    const auto it = record_of_frame.find({keyframe->frameIndex(), keyframe->timestamp()});
+    if (it != record_of_frame.end()) velocities[keyframe] = frame_velocities[it->second];
+  }
+  return velocities;
 }
 
 std::vector<LoopRecord> System::loops() const {

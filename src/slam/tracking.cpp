@@ -976,27 +976,29 @@ static void refineFramePose(const PinholeCamera& camera, const CameraVelocity& v
   record.T_c_ref = result.T_cw * live->pose().inverse();
 }
 
+std::vector<CameraVelocity> Tracking::frameVelocities() const {
+  std::vector<std::optional<SE3>> poses(records_.size());
+  for (size_t k = 0; k < records_.size(); ++k)
+    if (records_[k].tracked && records_[k].reference)
+      poses[k] = poseThroughReference(records_[k].reference, records_[k].T_c_ref);
+  std::vector<CameraVelocity> velocities(records_.size());
+  for (size_t k = 0; k < records_.size(); ++k) {
+    const size_t before = k > 0 && poses[k - 1] ? k - 1 : k;
+    const size_t after = k + 1 < records_.size() && poses[k + 1] ? k + 1 : k;
+    const double dt = records_[after].timestamp - records_[before].timestamp;
+    if (poses[before] && poses[after] && dt > 0) velocities[k] = velocityBetween(*poses[before], *poses[after], dt);
+  }
+  return velocities;
+}
+
 Tracking::FrameRefinement Tracking::refineFramePoses(const PinholeCamera& camera) {
   // The other threads have stopped and the caller holds the map lock, so the
   // map is only read here: the frames are split between this thread and one
   // more (map.hpp).
   // A rolling shutter needs each frame's velocity: from its neighbours' poses
   // as the final map places them, before any is changed here.
-  std::vector<CameraVelocity> velocities(records_.size());
-  if (camera.readout_s > 0) {
-    std::vector<std::optional<SE3>> poses(records_.size());
-    for (size_t k = 0; k < records_.size(); ++k)
-      if (records_[k].tracked && records_[k].reference)
-        poses[k] = poseThroughReference(records_[k].reference, records_[k].T_c_ref);
-    for (size_t k = 0; k < records_.size(); ++k) {
-      // Central where both neighbours are posed, else one-sided, else standing still.
-      const size_t before = k > 0 && poses[k - 1] ? k - 1 : k;
-      const size_t after = k + 1 < records_.size() && poses[k + 1] ? k + 1 : k;
-      const double dt = records_[after].timestamp - records_[before].timestamp;
-      if (poses[before] && poses[after] && dt > 0)
-        velocities[k] = velocityBetween(*poses[before], *poses[after], dt);
-    }
-  }
+  const std::vector<CameraVelocity> velocities =
+      camera.readout_s > 0 ? frameVelocities() : std::vector<CameraVelocity>(records_.size());
   auto refineRange = [&](size_t begin, size_t end) {
     FrameRefinement refinement;
     for (size_t k = begin; k < end; ++k) refineFramePose(camera, velocities[k], records_[k], refinement);

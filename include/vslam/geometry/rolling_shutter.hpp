@@ -23,6 +23,11 @@ struct CameraVelocity {
 // The constant velocity that takes pose T_cw_before to T_cw_after in dt > 0 seconds.
 CameraVelocity velocityBetween(const SE3& T_cw_before, const SE3& T_cw_after, double dt);
 
+// The camera's own motion over row_time seconds: a point fixed in the world,
+// at p in the camera at the middle row's time, is at motionOverRowTime(...) * p
+// in the camera when row_time later it exposes another row.
+SE3 motionOverRowTime(const CameraVelocity& velocity, double row_time);
+
 // Seconds from the middle row's exposure to row y's (negative above the middle).
 inline double rowTime(double y, int height, double readout_s) { return (y / height - 0.5) * readout_s; }
 

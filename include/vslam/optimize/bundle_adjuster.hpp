@@ -19,6 +19,7 @@
 
 #include "vslam/core/camera.hpp"
 #include "vslam/core/types.hpp"
+#include "vslam/geometry/rolling_shutter.hpp"
 #include "vslam/optimize/reprojection.hpp"
 
 namespace vslam {
@@ -28,6 +29,9 @@ struct BaKeyframe {
   SE3 T_cw;
   bool fixed = false;
   bool fix_translation_norm = false;  // ignored when `fixed`
+  // With BundleProblem::readout_s > 0: the camera's velocity as the keyframe
+  // was exposed, and T_cw is its middle row's pose (rolling_shutter.hpp).
+  CameraVelocity velocity = {};
 };
 
 struct BaPoint {
@@ -49,6 +53,10 @@ struct BundleProblem {
   std::vector<BaKeyframe> keyframes;
   std::vector<BaPoint> points;
   std::vector<BaObservation> observations;
+  // A rolling shutter's readout (first to last row, seconds; 0: global
+  // shutter): each observation is seen at its row's time, the camera moved by
+  // its keyframe's velocity. Not saved by saveBundleProblem.
+  double readout_s = 0;
 };
 
 enum class BundleLinearSolver {

@@ -15,6 +15,8 @@
 #include "vslam/core/config.hpp"
 #include "vslam/core/stage_timer.hpp"
 #include "vslam/core/types.hpp"
+#include "vslam/geometry/rolling_shutter.hpp"
+#include "vslam/map/id_order.hpp"
 #include "vslam/map/object_map.hpp"
 
 namespace vslam {
@@ -179,6 +181,9 @@ class System {
 
  private:
   bool runFinalBundleAdjustment(const FinishOptions& options);
+  // With a rolling shutter, the camera's velocity at each keyframe, from the
+  // tracked frames beside it (the final BA poses keyframes at their middle rows).
+  KeyFrameMap<CameraVelocity> keyframeVelocities() const;
   Config config_;
   SystemOptions options_;
   // Rethrows, on the caller's thread, an exception that stopped a worker thread.

@@ -11,6 +11,7 @@
 
 #include "vslam/core/config.hpp"
 #include "vslam/core/stage_timer.hpp"
+#include "vslam/geometry/rolling_shutter.hpp"
 #include "vslam/map/map.hpp"
 
 namespace vslam {
@@ -131,6 +132,10 @@ class Tracking {
     }
   };
   FrameRefinement refineFramePoses(const PinholeCamera& camera);
+  // The camera's velocity at each record (records()), from its neighbours'
+  // poses as the map now places them: central where both are tracked, else
+  // one-sided, else standing still. The caller holds the map lock.
+  std::vector<CameraVelocity> frameVelocities() const;
   const std::vector<FrameRecord>& records() const { return records_; }
   int initialisedAtIndex() const { return initialised_at_index_; }
   // Why the last attempt to start a map failed ("frame 15 against frame 0:

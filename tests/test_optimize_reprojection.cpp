@@ -69,7 +69,7 @@ void checkJacobians(const ceres::Manifold& manifold, bool with_row_motion = fals
   const Vec2 pixel = Vec2(m.fx * p_c.x() / p_c.z() + m.cx, m.fy * p_c.y() / p_c.z() + m.cy) + Vec2(3.0, -2.0);
   const double u_right = pixel.x() - m.bf / p_c.z() + 1.5;
   const ReprojectionCost<kResiduals> cost =
-      with_row_motion ? ReprojectionCost<kResiduals>(m, pixel, u_right, 0.7, kRowMotion)
+      with_row_motion ? ReprojectionCost<kResiduals>(m, pixel, u_right, 0.7, &kRowMotion)
                       : ReprojectionCost<kResiduals>(m, pixel, u_right, 0.7);
   const PoseParameters pose = poseToParameters(kPose);
   RowMajorMatrix d_point;
@@ -108,7 +108,7 @@ TEST(Reprojection, JacobiansWithARollingShuttersRowMotion) {
 TEST(Reprojection, RowMotionProjectsFromTheMovedPose) {
   const ProjectionModel m = model();
   const Vec2 pixel(300.0, 200.0);
-  const ReprojectionCost<3> moved(m, pixel, 290.0, 0.5, kRowMotion);
+  const ReprojectionCost<3> moved(m, pixel, 290.0, 0.5, &kRowMotion);
   const ReprojectionCost<3> plain(m, pixel, 290.0, 0.5);
   const PoseParameters pose = poseToParameters(kPose);
   const PoseParameters moved_pose = poseToParameters(kRowMotion * kPose);

@@ -130,16 +130,14 @@ BundleResult bundleAdjust(const PinholeCamera& camera, double bf, BundleProblem&
     const BaObservation& obs = problem.observations[i];
     double* pose = poses[obs.keyframe].data();
     double* point = points[obs.point].data();
-    ceres::CostFunction* cost = nullptr;
+    const SE3* motion = row_motion.empty() ? nullptr : &row_motion[i];
     if (!hasRightCoordinate(obs.u_right)) {
-      cost = row_motion.empty() ? new ReprojectionCost<2>(model, obs.pixel, obs.u_right, obs.inv_sigma2)
-                                : new ReprojectionCost<2>(model, obs.pixel, obs.u_right, obs.inv_sigma2, row_motion[i]);
+      residual_ids[i] = ceres_problem.AddResidualBlock(
+          new ReprojectionCost<2>(model, obs.pixel, obs.u_right, obs.inv_sigma2, motion), &loss_mono, pose, point);
     } else {
-      cost = row_motion.empty() ? new ReprojectionCost<3>(model, obs.pixel, obs.u_right, obs.inv_sigma2)
-                                : new ReprojectionCost<3>(model, obs.pixel, obs.u_right, obs.inv_sigma2, row_motion[i]);
+      residual_ids[i] = ceres_problem.AddResidualBlock(
+          new ReprojectionCost<3>(model, obs.pixel, obs.u_right, obs.inv_sigma2, motion), &loss_stereo, pose, point);
     }
-    residual_ids[i] = ceres_problem.AddResidualBlock(
-        cost, hasRightCoordinate(obs.u_right) ? &loss_stereo : &loss_mono, pose, point);
     ++residuals_of_keyframe[obs.keyframe];
     ++residuals_of_point[obs.point];
   }

@@ -107,7 +107,7 @@ bool loopAccepted(double scale, int inliers, const LoopScaleRule& rule) {
 
 FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations,
                                                    const FullBundleAdjustmentControl& control,
-                                                   const RollingShutterMotion* shutter) {
+                                                   const KeyFrameMap<CameraVelocity>* velocities) {
   FullBundleAdjustmentResult summary;
   BundleProblem problem;
   std::vector<KeyFrame*> keyframes;
@@ -123,13 +123,12 @@ FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations,
       slot[kf] = static_cast<int>(problem.keyframes.size());
       // The first keyframe anchors the gauge (and, with the map's scale, the scale).
       problem.keyframes.push_back({kf->id(), kf->pose(), kf == keyframes.front()});
-      if (shutter && shutter->velocities.count(kf)) problem.keyframes.back().velocity = shutter->velocities.at(kf);
+      if (velocities) {
+        const auto velocity = velocities->find(kf);
+        if (velocity != velocities->end()) problem.keyframes.back().velocity = velocity->second;
+      }
     }
-    if (shutter) {
-      problem.readout_s = camera->readout_s;
-      if (shutter->rotation_only)
-        for (BaKeyframe& kf : problem.keyframes) kf.velocity.linear.setZero();
-    }
+    if (velocities) problem.readout_s = camera->readout_s;
     for (MapPoint* point : map.mapPoints()) {
       const size_t first_observation = problem.observations.size();
       int weight = 0;

@@ -184,20 +184,17 @@ void writePoseJacobian(const Eigen::Matrix<double, kResiduals, 3>& d_residual_d_
 
 // Observation of a free point by a free pose: parameter blocks (pose 7, point 3).
 // With `row_motion` (a rolling shutter, rolling_shutter.hpp) the pose is the
-// middle row's and the pixel was seen after the camera moved by row_motion:
-// the point is projected from row_motion * T_cw, row_motion held fixed.
+// middle row's and the pixel was seen after the camera moved by *row_motion:
+// the point is projected from *row_motion * T_cw, held fixed. The motion is
+// the caller's and must outlive the cost (bundleAdjust keeps one per
+// observation for the solve); a pointer keeps Local Mapping's costs small.
 template <int kResiduals>
 class ReprojectionCost : public ceres::SizedCostFunction<kResiduals, kPoseParameterSize, 3> {
  public:
-  ReprojectionCost(const ProjectionModel& model, const Vec2& pixel, double u_right, double inv_sigma2)
-      : model_(model), measured_(measurementVector<kResiduals>(pixel, u_right)),
-        sqrt_information_(std::sqrt(inv_sigma2)) {}
   ReprojectionCost(const ProjectionModel& model, const Vec2& pixel, double u_right, double inv_sigma2,
-                   const SE3& row_motion)
-      : ReprojectionCost(model, pixel, u_right, inv_sigma2) {
-    row_motion_ = row_motion;
-    has_row_motion_ = true;
-  }
+                   const SE3* row_motion = nullptr)
+      : model_(model), measured_(measurementVector<kResiduals>(pixel, u_right)),
+        sqrt_information_(std::sqrt(inv_sigma2)), row_motion_(row_motion) {}
 
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
     const Eigen::Map<const Quat> q(parameters[0]);
@@ -205,14 +202,14 @@ class ReprojectionCost : public ceres::SizedCostFunction<kResiduals, kPoseParame
     const Eigen::Map<const Vec3> p_w(parameters[1]);
     const Mat3 R = q.toRotationMatrix();
     const Vec3 p_c = R * p_w + t;
-    const Vec3 p_seen = has_row_motion_ ? Vec3(row_motion_ * p_c) : p_c;
+    const Vec3 p_seen = row_motion_ ? Vec3(*row_motion_ * p_c) : p_c;
     if (!jacobians) {
       reprojectionResidual<kResiduals>(model_, sqrt_information_, measured_, p_seen, residuals, nullptr);
       return true;
     }
     Eigen::Matrix<double, kResiduals, 3> d_r_d_pc;
     reprojectionResidual<kResiduals>(model_, sqrt_information_, measured_, p_seen, residuals, &d_r_d_pc);
-    if (has_row_motion_) d_r_d_pc = (d_r_d_pc * row_motion_.R).eval();
+    if (row_motion_) d_r_d_pc = (d_r_d_pc * row_motion_->R).eval();
     if (jacobians[0]) writePoseJacobian<kResiduals>(d_r_d_pc, p_c, jacobians[0]);
     if (jacobians[1]) {
       Eigen::Map<Eigen::Matrix<double, kResiduals, 3, Eigen::RowMajor>> d_r_d_point(jacobians[1]);
@@ -225,8 +222,7 @@ class ReprojectionCost : public ceres::SizedCostFunction<kResiduals, kPoseParame
   ProjectionModel model_;
   Eigen::Matrix<double, kResiduals, 1> measured_;
   double sqrt_information_;
-  SE3 row_motion_;
-  bool has_row_motion_ = false;
+  const SE3* row_motion_;
 };
 
 // Observation of a known point by a free pose (pose-only optimisation). It can

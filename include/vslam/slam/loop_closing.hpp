@@ -55,30 +55,19 @@ struct FullBundleAdjustmentControl {
   LocalMapping* local_mapping = nullptr;
 };
 
-// A rolling shutter's motion in a full BA (rolling_shutter.hpp).
-struct RollingShutterMotion {
-  // The camera's velocity at each keyframe, from Tracking's frames; a keyframe
-  // without one is taken as standing still.
-  KeyFrameMap<CameraVelocity> velocities;
-  // Correct for the camera's rotation over the readout only. A monocular map
-  // needs it: the corrections' translations are in the map's units as they
-  // stand, so they break its free scale and the BA trades scale for them
-  // (fr1_xyz's map shrank to 0.66 of its size; to 0.95 with the second
-  // keyframe's distance held). A rotation is the same at every scale.
-  bool rotation_only = false;
-};
-
 // Bundle adjustment of every live keyframe and map point, the first keyframe
 // fixed: the problem is copied under the map lock, solved without it, and
 // merged back under it. Keyframes created meanwhile follow their spanning-tree
 // parent's correction; points not in the problem follow their reference
 // keyframe. Used after a loop correction (on its own thread) and as the final
-// BA of a run. With `shutter` (a camera with camera.readout_s > 0), each
-// observation is taken at its row's time and the keyframes are posed at their
-// middle rows.
+// BA of a run. With `velocities` (the camera's velocity at each keyframe,
+// from Tracking's frames; a keyframe without one is taken as standing still)
+// and a camera with a rolling shutter (camera.readout_s > 0), each observation
+// is taken at its row's time and the keyframes are posed at their middle rows
+// (rolling_shutter.hpp).
 FullBundleAdjustmentResult runFullBundleAdjustment(Map& map, int iterations,
                                                    const FullBundleAdjustmentControl& control = {},
-                                                   const RollingShutterMotion* shutter = nullptr);
+                                                   const KeyFrameMap<CameraVelocity>* velocities = nullptr);
 
 // Plausibility of a loop's Sim(3) scale correction. Monocular scale drifts by
 // a few per cent over a loop; a correction outside [0.5, 2] more often means a

@@ -182,7 +182,8 @@ class System {
  private:
   bool runFinalBundleAdjustment(const FinishOptions& options);
   // With a rolling shutter, the camera's velocity at each keyframe, from the
-  // tracked frames beside it (the final BA poses keyframes at their middle rows).
+  // tracked frames beside it (the final BA poses keyframes at their middle
+  // rows); a monocular map's without its translation. Empty without one.
   KeyFrameMap<CameraVelocity> keyframeVelocities() const;
   Config config_;
   SystemOptions options_;

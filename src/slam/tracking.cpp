@@ -223,7 +223,10 @@ bool Tracking::track(Frame& frame) {
     // kept for a rolling shutter's correction (System::finish).
     const bool keep_matches =
         config_.loop.refine_frames && (!localization_only_ || config_.camera.readout_s > 0);
-    if (!keyframe_made && keep_matches) recordMatches(frame, record);
+    // A keyframe's frame too: should the keyframe be culled, the frame is
+    // posed again in the final map like any other.
+    if (keep_matches) recordMatches(frame, record);
+    if (keyframe_made) record.made_keyframe = reference_keyframe_;
   }
   records_.push_back(std::move(record));
   // Early failure: a map just initialised (a few keyframes) is not worth
@@ -934,6 +937,8 @@ static void refineFramePose(const PinholeCamera& camera, const CameraVelocity& v
   std::vector<FrameRecord::Match> matches;
   matches.swap(record.matches);  // the record's are freed whatever happens below
   if (!record.tracked || !record.reference || matches.size() < kMinMatches) return;
+  // A live keyframe's frame keeps the keyframe's pose, which the final BA set.
+  if (record.made_keyframe && !record.made_keyframe->isBad()) return;
   std::vector<Vec3> points_w;
   std::vector<Observation2D> observations;
   for (const FrameRecord::Match& match : matches) {
@@ -1023,6 +1028,7 @@ void Tracking::resetMap() {
   for (FrameRecord& record : records_) {
     record.tracked = false;
     record.reference = nullptr;
+    record.made_keyframe = nullptr;
     record.matches.clear();
   }
   local_keyframes_.clear();

@@ -59,9 +59,11 @@ struct FrameRecord {
   // --localize with depth: tracked by visual odometry alone (under 10 map
   // points matched), not localised against the map.
   bool by_odometry = false;
-  // The frame's inlier matches, kept until the run ends (loop.refine_frames;
-  // not for keyframes, whose pose is their own): 24 bytes each, about 5 KB a
-  // frame on TUM sequences.
+  // The keyframe this frame became, if any. While it lives the frame's pose
+  // is the keyframe's; once culled, the frame is posed again from its matches.
+  KeyFrame* made_keyframe = nullptr;
+  // The frame's inlier matches, kept until the run ends (loop.refine_frames):
+  // 24 bytes each, about 5 KB a frame on TUM sequences.
   struct Match {
     MapPoint* point = nullptr;
     Eigen::Vector2f pixel = Eigen::Vector2f::Zero();  // undistorted

@@ -2,7 +2,7 @@
 // from ../shared), deterministic mode so the result does not depend on timing.
 #include <gtest/gtest.h>
 
-#include "test_support.hpp"
+#include "sequence_test_support.hpp"
 #include "vslam/eval/ate.hpp"
 #include "vslam/io/sequence.hpp"
 #include "vslam/slam/system.hpp"
@@ -29,9 +29,7 @@ RunResult runFirstFrames(const Sequence& sequence, size_t count) {
 }
 
 TEST(SlamFr1Xyz, First150FramesTrackAccurately) {
-  SequenceOptions options;
-  options.data_root = test::sharedData().string();
-  const Sequence sequence = openSequence("tum/fr1_xyz", options);
+  const Sequence sequence = test::openSharedSequence("tum/fr1_xyz");
   const RunResult run = runFirstFrames(sequence, 150);
 
   // Initialised within the first second (30 frames) and every later frame tracked.
@@ -54,9 +52,7 @@ TEST(SlamFr1Xyz, First150FramesTrackAccurately) {
 // with the translation too, the map's free scale was traded for the fixed
 // corrections and the keyframes shrank by a third over the whole sequence.
 TEST(SlamFr1Xyz, RollingShutterFinalBaKeepsTheMonocularScale) {
-  SequenceOptions options;
-  options.data_root = test::sharedData().string();
-  const Sequence sequence = openSequence("tum/fr1_xyz", options);
+  const Sequence sequence = test::openSharedSequence("tum/fr1_xyz");
   ASSERT_GT(sequence.config.camera.readout_s, 0);
   const RunResult run = runFirstFrames(sequence, 300);
   ASSERT_GE(run.stats.keyframes, 5);
@@ -71,13 +67,12 @@ TEST(SlamFr1Xyz, RollingShutterFinalBaKeepsTheMonocularScale) {
 
 // After the final BA every tracked frame is posed again in the final map,
 // except live keyframes (posed by the BA itself); the map's first two
-// keyframes record no matches, hence the 2 allowed. A frame that made a keyframe which Local Mapping later
-// culled used to keep the culled keyframe's stale pose: here 5 frames of 299
-// were left out (22 over the whole sequence), and none is now.
+// keyframes record no matches, hence the 2 allowed. A frame that made a
+// keyframe which Local Mapping later culled used to keep the culled
+// keyframe's stale pose: here 5 frames of 299 were left out (22 over the
+// whole sequence), and none is now.
 TEST(SlamFr1Xyz, FramesOfCulledKeyframesArePosedAgain) {
-  SequenceOptions options;
-  options.data_root = test::sharedData().string();
-  const Sequence sequence = openSequence("tum/fr1_xyz", options);
+  const Sequence sequence = test::openSharedSequence("tum/fr1_xyz");
   const RunResult run = runFirstFrames(sequence, 300);
   ASSERT_GT(run.stats.culled_keyframes, 0);
   ASSERT_GT(run.stats.frames_tracked, 250);
@@ -88,9 +83,7 @@ TEST(SlamFr1Xyz, FramesOfCulledKeyframesArePosedAgain) {
 }
 
 TEST(SlamFr1Xyz, DeterministicModeRepeatsExactly) {
-  SequenceOptions options;
-  options.data_root = test::sharedData().string();
-  const Sequence sequence = openSequence("tum/fr1_xyz", options);
+  const Sequence sequence = test::openSharedSequence("tum/fr1_xyz");
   const RunResult first = runFirstFrames(sequence, 60);
   const RunResult second = runFirstFrames(sequence, 60);
   ASSERT_EQ(first.frames.size(), second.frames.size());

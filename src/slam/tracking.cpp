@@ -226,7 +226,7 @@ bool Tracking::track(Frame& frame) {
     // A keyframe's frame too: should the keyframe be culled, the frame is
     // posed again in the final map like any other.
     if (keep_matches) recordMatches(frame, record);
-    if (keyframe_made) record.made_keyframe = reference_keyframe_;
+    record.made_keyframe = keyframe_made;
   }
   records_.push_back(std::move(record));
   // Early failure: a map just initialised (a few keyframes) is not worth
@@ -938,7 +938,7 @@ static void refineFramePose(const PinholeCamera& camera, const CameraVelocity& v
   matches.swap(record.matches);  // the record's are freed whatever happens below
   if (!record.tracked || !record.reference || matches.size() < kMinMatches) return;
   // A live keyframe's frame keeps the keyframe's pose, which the final BA set.
-  if (record.made_keyframe && !record.made_keyframe->isBad()) return;
+  if (record.made_keyframe && !record.reference->isBad()) return;
   std::vector<Vec3> points_w;
   std::vector<Observation2D> observations;
   for (const FrameRecord::Match& match : matches) {
@@ -1028,7 +1028,6 @@ void Tracking::resetMap() {
   for (FrameRecord& record : records_) {
     record.tracked = false;
     record.reference = nullptr;
-    record.made_keyframe = nullptr;
     record.matches.clear();
   }
   local_keyframes_.clear();

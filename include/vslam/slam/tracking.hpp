@@ -59,9 +59,9 @@ struct FrameRecord {
   // --localize with depth: tracked by visual odometry alone (under 10 map
   // points matched), not localised against the map.
   bool by_odometry = false;
-  // The keyframe this frame became, if any. While it lives the frame's pose
-  // is the keyframe's; once culled, the frame is posed again from its matches.
-  KeyFrame* made_keyframe = nullptr;
+  // The frame became a keyframe: `reference`. While that keyframe lives the
+  // frame's pose is its; once culled, the frame is posed again from its matches.
+  bool made_keyframe = false;
   // The frame's inlier matches, kept until the run ends (loop.refine_frames):
   // 24 bytes each, about 5 KB a frame on TUM sequences.
   struct Match {

@@ -2,7 +2,8 @@
 // SearchBySim3) on two hand-built keyframes related by a known similarity:
 // the matches it adds are exactly the true pairs, and each decoy (outside the
 // window, one-sided, an already matched keypoint, wrong level, far
-// descriptor, no map point) is left out.
+// descriptor, no map point) is left out. And loop fusion's rule: where a
+// loop point meets a keypoint that has a point already, the loop point stays.
 #include <algorithm>
 #include <array>
 #include <cstdint>
@@ -219,6 +220,40 @@ TEST_F(Sim3SearchTest, AddsExactlyTheMutualMatchesOfTheSimilarity) {
   std::vector<MapPoint*> unguided = before;
   EXPECT_EQ(searchBySim3(*kf1, *kf2, Sim3(), unguided), 0);
   EXPECT_EQ(unguided, before);
+}
+
+// Loop fusion (ORB-SLAM2's SearchAndFuse) keeps the loop side's point even
+// where the current side's point is seen more; Local Mapping's fusion keeps
+// the one seen more.
+TEST_F(Sim3SearchTest, LoopFusionKeepsTheLoopSidesPoint) {
+  for (const FuseKeeps keeps : {FuseKeeps::Projected, FuseKeeps::MoreObserved}) {
+    map_.clear();
+    std::mt19937 rng(7);
+    const Descriptor d = randomDescriptor(rng);
+    const Vec2 px(320, 240);
+    FeatureList one;
+    one.add(px, d);
+    // The loop side: one keyframe. The current side: two keyframes seeing the
+    // same spot, 1 cm to the side (the drift the loop correction left).
+    KeyFrame* loop_kf = makeKeyFrame(0, one, SE3());
+    KeyFrame* current_kf = makeKeyFrame(1, one, SE3(Mat3::Identity(), Vec3(0.01, 0, 0)));
+    KeyFrame* current_neighbour = makeKeyFrame(2, one, SE3(Mat3::Identity(), Vec3(0.01, 0, 0)));
+    MapPoint* loop_point = addPoint(loop_kf, 0, 3.0);
+    MapPoint* own_point = addPoint(current_kf, 0, 3.0);
+    own_point->addObservation(current_neighbour, 0);
+    current_neighbour->setMapPoint(0, own_point);
+    ASSERT_GT(own_point->observationCount(), loop_point->observationCount());
+
+    ASSERT_EQ(fuse(current_kf, {loop_point}, 4.0, keeps), 1);
+    MapPoint* survivor = keeps == FuseKeeps::Projected ? loop_point : own_point;
+    MapPoint* retired = keeps == FuseKeeps::Projected ? own_point : loop_point;
+    EXPECT_TRUE(retired->isBad());
+    EXPECT_FALSE(survivor->isBad());
+    EXPECT_EQ(current_kf->mapPoint(0), survivor);
+    EXPECT_EQ(current_neighbour->mapPoint(0), survivor);
+    EXPECT_EQ(loop_kf->mapPoint(0), survivor);
+    EXPECT_EQ(survivor->observationCount(), 3);
+  }
 }
 
 }  // namespace

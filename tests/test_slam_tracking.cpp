@@ -108,5 +108,52 @@ TEST(TrackingAfterRelocalisation, NoKeyFrameUntilTheRelocalisedPoseHasHeld) {
   EXPECT_FALSE(keyFrameAllowedAfterRelocalisation(101, 100, 20, 21));
 }
 
+// ORB-SLAM2's step after relocalisation's PnP: with fewer than 50 inliers, a
+// guided search by projection adds the candidate keyframe's other points and
+// the pose is optimised again. Here a frame the room map tracks is given only
+// 20 of its matches with the candidate and a pose 1 cm and 0.5 degrees off.
+TEST(TrackingAfterRelocalisation, AGuidedSearchAddsTheCandidatesOtherPoints) {
+  RoomLoopParams room;
+  const std::vector<StampedPose> path = roomLoopPath(room);
+  constexpr long kFrames = 40;
+  RoomLoopRenderer renderer(room);
+  Config config;
+  config.camera = room.camera;
+  config.detector.model = "none";
+  config.loop.vocabulary.clear();
+  TrackedRoom tracked(config);
+  cv::Mat image;
+  for (long k = 0; k <= kFrames; ++k) {
+    image = renderer.render(path[k].T_wc);
+    tracked.track(k, image);
+  }
+  ASSERT_EQ(tracked.tracking.state(), TrackingState::Ok);
+  const KeyFrame* candidate = tracked.map.keyframes().back();
+  std::vector<size_t> seen_by_candidate;
+  for (size_t i = 0; i < tracked.last.size(); ++i)
+    if (tracked.last.map_points[i] && tracked.last.map_points[i]->keypointIn(candidate) >= 0)
+      seen_by_candidate.push_back(i);
+  ASSERT_GE(seen_by_candidate.size(), 80u) << "the last frame should see much of its newest keyframe";
+
+  // The same image as a new frame: the same keypoints, 20 of the matches.
+  Frame frame = tracked.builder.build(kFrames + 1, static_cast<int>(kFrames), 0.1 * kFrames, image, cv::Mat());
+  ASSERT_EQ(frame.size(), tracked.last.size());
+  frame.map_points.assign(frame.size(), nullptr);
+  for (size_t k = 0; k < 20; ++k) {
+    const size_t i = seen_by_candidate[k * seen_by_candidate.size() / 20];
+    frame.map_points[i] = tracked.last.map_points[i];
+  }
+  SE3 offset;
+  offset.R = Eigen::AngleAxisd(0.5 * M_PI / 180, Vec3(0, 1, 0)).toRotationMatrix();
+  offset.t = Vec3(0.01, 0, 0);
+  frame.T_cw = offset * tracked.last.T_cw;
+
+  const int inliers = tracked.tracking.refineRelocalisedPose(frame, *candidate);
+  EXPECT_GE(inliers, 50);
+  EXPECT_GE(inliers, static_cast<int>(0.8 * seen_by_candidate.size()));
+  EXPECT_LT((frame.T_cw.t - tracked.last.T_cw.t).norm(), 2e-3);
+  EXPECT_LT(Eigen::AngleAxisd(frame.T_cw.R.transpose() * tracked.last.T_cw.R).angle(), 0.1 * M_PI / 180);
+}
+
 }  // namespace
 }  // namespace vslam

@@ -591,7 +591,7 @@ bool LoopClosing::correctLoop(KeyFrame* current, LoopCandidate& loop) {
       loop_point->updateDescriptor();
     }
   }
-  for (KeyFrame* kf : connected) fuse(kf, loop.loop_points, 4.0);
+  for (KeyFrame* kf : connected) fuse(kf, loop.loop_points, 4.0, FuseKeeps::Projected);
 
   // New links created by the fusion are the loop edges of the essential graph.
   KeyFrameMap<KeyFrameSet> new_links;

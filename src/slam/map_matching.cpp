@@ -322,7 +322,7 @@ int searchBySim3(const KeyFrame& kf1, const KeyFrame& kf2, const Sim3& S12, std:
   return added;
 }
 
-int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius_factor) {
+int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius_factor, FuseKeeps keeps) {
   const ScalePyramid& pyramid = keyframe->pyramid();
   const Sim3 S_cw(keyframe->pose());
   const Vec3 centre = keyframe->cameraCentre();
@@ -356,7 +356,7 @@ int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius
     if (best_index < 0 || best_distance > kHammingThresholdGuided) continue;
     MapPoint* existing = keyframe->mapPoint(best_index);
     if (existing && !existing->isBad()) {
-      if (existing->observationCount() > point->observationCount())
+      if (keeps == FuseKeeps::MoreObserved && existing->observationCount() > point->observationCount())
         point->replaceWith(existing);
       else
         existing->replaceWith(point);

@@ -657,29 +657,33 @@ bool Tracking::relocalise(Frame& frame) {
     frame.T_cw = T_cw;
     frame.map_points.assign(frame.size(), nullptr);
     for (int k : inliers) frame.map_points[keypoint_of[k]] = matches[keypoint_of[k]];
-    optimisePose(frame);
-    int good = discardOutliers(frame);
-    if (good < 10) continue;
-    // Too few: project the candidate's other points with the new pose, then optimise again.
-    if (good < kRelocMinInliers) {
-      const int added = searchByProjection(frame, *keyframe, frame.map_points, 10.0, 100);
-      if (good + added >= kRelocMinInliers) {
-        optimisePose(frame);
-        good = discardOutliers(frame);
-        if (good < kRelocMinInliers) {
-          searchByProjection(frame, *keyframe, frame.map_points, 3.0, 64);
-          optimisePose(frame);
-          good = discardOutliers(frame);
-        }
-      }
-    }
-    if (good >= kRelocMinInliers) {
+    if (refineRelocalisedPose(frame, *keyframe) >= kRelocMinInliers) {
       reference_keyframe_ = keyframe;
       return true;
     }
   }
   frame.map_points.assign(frame.size(), nullptr);
   return false;
+}
+
+int Tracking::refineRelocalisedPose(Frame& frame, const KeyFrame& candidate) {
+  optimisePose(frame);
+  int good = discardOutliers(frame);
+  if (good < 10) return good;
+  // Too few: project the candidate's other points with the new pose, then optimise again.
+  if (good < kRelocMinInliers) {
+    const int added = searchByProjection(frame, candidate, frame.map_points, 10.0, 100);
+    if (good + added >= kRelocMinInliers) {
+      optimisePose(frame);
+      good = discardOutliers(frame);
+      if (good < kRelocMinInliers) {
+        searchByProjection(frame, candidate, frame.map_points, 3.0, 64);
+        optimisePose(frame);
+        good = discardOutliers(frame);
+      }
+    }
+  }
+  return good;
 }
 
 void Tracking::updateLocalMap(Frame& frame) {

@@ -73,9 +73,16 @@ std::optional<PredictedObservation> predictObservation(const MapPoint& point, co
 int searchBySim3(const KeyFrame& kf1, const KeyFrame& kf2, const Sim3& S12, std::vector<MapPoint*>& matches12,
                  double radius_px = 7.5);
 
+// Which point survives when a projected point meets a keypoint that already
+// has one: Local Mapping keeps the one seen more (ORB-SLAM2's Fuse); loop
+// fusion keeps the projected loop-side point, so the corrected map is the
+// one the loop was verified against (ORB-SLAM2's SearchAndFuse).
+enum class FuseKeeps { MoreObserved, Projected };
+
 // Projects `points` into `keyframe` and fuses each with the keyframe's
 // matching keypoint: adds an observation, or merges with the point already
-// there (keeping the one seen more). Returns the number fused.
-int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius_factor = 3.0);
+// there (the survivor chosen by `keeps`). Returns the number fused.
+int fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, double radius_factor = 3.0,
+         FuseKeeps keeps = FuseKeeps::MoreObserved);
 
 }  // namespace vslam

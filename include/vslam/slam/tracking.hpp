@@ -145,6 +145,11 @@ class Tracking {
   // that never starts a map reports it.
   const std::string& lastStartFailure() const { return start_failure_; }
   int keyframesCreated() const { return keyframes_created_; }
+  // Relocalisation's step after PnP (ORB-SLAM2's): optimises `frame`'s pose on
+  // its matches; while fewer than 50 hold, adds the candidate keyframe's other
+  // points by projection (10 px, then 3 px) and optimises again. Returns the
+  // inliers kept; relocalisation succeeds at 50.
+  int refineRelocalisedPose(Frame& frame, const KeyFrame& candidate);
   int lastTrackedPoints() const { return last_tracked_points_; }
   // Map points matched in the last frame's local-map search, before the pose
   // optimisation rejected outliers (0 when it was not tracked).

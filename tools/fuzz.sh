@@ -50,7 +50,9 @@ for target in "${targets[@]}"; do
   else
     status=1
     echo "fuzz.sh: $target: FAILED; input in $out/findings/$target/, log $log:" >&2
-    grep -E "ERROR|runtime error|SUMMARY|Test unit written|ALARM|deadly signal|==[0-9]+==" "$log" | head -20 >&2 || tail -20 "$log" >&2
+    grep -E "ERROR|runtime error|SUMMARY|Test unit written|ALARM|deadly signal|==[0-9]+==|^Base64:" "$log" | head -20 >&2 || tail -20 "$log" >&2
+    # The stack and the input itself: CI keeps only what is printed.
+    grep -E "^ +#[0-9]+ " "$log" | grep -v -E "in (fuzzer::|__sanitizer|__libc|_start|main )" | head -12 >&2 || true
   fi
 done
 exit "$status"

@@ -1,12 +1,15 @@
 #include "vslam/core/config.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <sstream>
 
-#include <opencv2/core/persistence.hpp>
 #include <yaml-cpp/yaml.h>
 
 #include "vslam/core/error.hpp"
@@ -209,42 +212,113 @@ Config loadVslamYaml(const std::string& text, const std::string& path) {
   return config;
 }
 
-// ORB-SLAM2 settings files are OpenCV FileStorage YAML ("%YAML:1.0").
-Config loadOrbSlamSettings(const std::string& text, const std::string& path) {
-  cv::FileStorage fs;
-  try {
-    fs.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
-  } catch (const cv::Exception& e) {
-    throw InputError(path, 0, "cannot parse ORB-SLAM settings file: " + e.msg);
-  } catch (const std::exception& e) {
-    // OpenCV's YAML parser lets std::length_error out of some malformed files
-    // (a key of invalid UTF-8 before a bare ':'; found by the config fuzz target).
-    throw InputError(path, 0, std::string("cannot parse ORB-SLAM settings file (malformed YAML: ") + e.what() + ")");
+// One "Key: value" line of an ORB-SLAM settings file.
+struct SettingsValue {
+  std::string text;  // without quotes and trailing comment
+  int line = 0;
+  bool quoted = false;
+};
+
+// ORB-SLAM settings files are OpenCV FileStorage YAML ("%YAML:1.0"); in
+// practice a flat list of "Key: value" lines, with indented blocks under
+// "Key: !!opencv-matrix" that nothing here reads. They are read line by line:
+// cv::FileStorage (OpenCV 4.6) loops forever on some malformed files ("  k1-:3"
+// then " r", found by the config fuzz target), and yaml-cpp refuses genuine
+// ORB-SLAM2 files (Stereo/EuRoC.yaml writes "data:[...]").
+std::map<std::string, SettingsValue> readSettingsLines(const std::string& text, const std::string& path) {
+  auto is_blank = [](char c) { return c == ' ' || c == '\t'; };
+  auto trim = [&](std::string s) {
+    while (!s.empty() && (is_blank(s.back()) || s.back() == '\r')) s.pop_back();
+    size_t first = 0;
+    while (first < s.size() && is_blank(s[first])) ++first;
+    return s.substr(first);
+  };
+  std::map<std::string, SettingsValue> values;
+  std::istringstream in(text);
+  std::string raw;
+  int line = 0;
+  bool block_open = false;  // the last key had no value or a tag: indented lines below are its body
+  while (std::getline(in, raw)) {
+    ++line;
+    if (line == 1) continue;  // "%YAML:1.0", which parseConfig checked
+    const std::string content = trim(raw);
+    if (content.empty() || content[0] == '#') continue;
+    if (is_blank(raw[0])) {
+      if (!block_open)
+        throw InputError(path, line, "indented line outside a block (expected 'Key: value' at the start of the line)");
+      continue;
+    }
+    if (content == "---" || content == "...")
+      throw InputError(path, line, "a settings file holds one YAML document ('" + content + "')");
+    if (content[0] == '-')
+      throw InputError(path, line, "expected a mapping of keys (Camera.fx: ...) at the top level, not a list");
+    // The key ends at the first ':' followed by a blank or the end of the line,
+    // else at the first ':' ("Camera.fx:517.3", which OpenCV reads too).
+    size_t colon = content.find(':');
+    while (colon != std::string::npos && colon + 1 < content.size() && !is_blank(content[colon + 1]))
+      colon = content.find(':', colon + 1);
+    if (colon == std::string::npos) colon = content.find(':');
+    const std::string key = colon == std::string::npos ? std::string() : trim(content.substr(0, colon));
+    const bool key_ok = !key.empty() && std::all_of(key.begin(), key.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-';
+    });
+    if (!key_ok) throw InputError(path, line, "expected 'Key: value' (a key of letters, digits, '.', '_' or '-')");
+    SettingsValue value;
+    value.line = line;
+    std::string rest = trim(content.substr(colon + 1));
+    if (!rest.empty() && (rest[0] == '"' || rest[0] == '\'')) {
+      const size_t close = rest.find(rest[0], 1);
+      if (close == std::string::npos) throw InputError(path, line, "unterminated quoted value of '" + key + "'");
+      const std::string after = trim(rest.substr(close + 1));
+      if (!after.empty() && after[0] != '#')
+        throw InputError(path, line, "unexpected text after the quoted value of '" + key + "'");
+      value.text = rest.substr(1, close - 1);
+      value.quoted = true;
+    } else {
+      // A comment starts at a '#' after a blank.
+      for (size_t i = 1; i < rest.size(); ++i)
+        if (rest[i] == '#' && is_blank(rest[i - 1])) {
+          rest = trim(rest.substr(0, i));
+          break;
+        }
+      value.text = rest;
+    }
+    block_open = !value.quoted && (value.text.empty() || value.text.rfind("!!", 0) == 0);
+    const auto [it, inserted] = values.emplace(key, value);
+    if (!inserted)
+      throw InputError(path, line, "key '" + key + "' given twice (first on line " + std::to_string(it->second.line) + ")");
   }
-  if (!fs.isOpened()) throw InputError(path, 0, "cannot open ORB-SLAM settings file");
-  // FileStorage asserts (throws cv::Exception) when a key is looked up in a
-  // list ("- Camera.fx: 1"; found by the config fuzz target).
-  if (!fs.root().isMap()) throw InputError(path, 0, "expected a mapping of keys (Camera.fx: ...) at the top level");
+  return values;
+}
+
+Config loadOrbSlamSettings(const std::string& text, const std::string& path) {
+  const std::map<std::string, SettingsValue> values = readSettingsLines(text, path);
 
   auto number = [&](const char* key, double& out, bool required) {
-    const cv::FileNode node = fs[key];
-    if (node.empty()) {
+    const auto it = values.find(key);
+    if (it == values.end()) {
       if (required) throw InputError(path, 0, std::string("missing required key '") + key + "'");
       return;
     }
-    if (!node.isReal() && !node.isInt())
-      throw InputError(path, 0, std::string("key '") + key + "' has the wrong type (expected a number)");
-    const double value = static_cast<double>(node);
-    if (!std::isfinite(value)) throw InputError(path, 0, std::string("key '") + key + "' is not a finite number");
-    out = value;
+    const SettingsValue& value = it->second;
+    const char* begin = value.text.c_str();
+    char* end = nullptr;
+    const double parsed = value.text.empty() || value.quoted ? 0.0 : std::strtod(begin, &end);
+    if (value.text.empty() || value.quoted || end != begin + value.text.size() || std::isspace(static_cast<unsigned char>(begin[0])))
+      throw InputError(path, value.line, std::string("key '") + key + "' has the wrong type (expected a number, got '" +
+                                             value.text + "')");
+    if (!std::isfinite(parsed)) throw InputError(path, value.line, std::string("key '") + key + "' is not a finite number");
+    out = parsed;
   };
   // Settings files may write integers as reals ("640.0"); a fraction or a
   // value beyond int is an error, not a silent cast.
   auto integer = [&](const char* key, int& out) {
     double v = out;
     number(key, v, false);
-    if (v != std::trunc(v) || v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max())
-      throw InputError(path, 0, std::string("key '") + key + "' must be an integer, got " + std::to_string(v));
+    if (v != std::trunc(v) || v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max()) {
+      const int line = values.count(key) ? values.at(key).line : 0;
+      throw InputError(path, line, std::string("key '") + key + "' must be an integer, got " + std::to_string(v));
+    }
     out = static_cast<int>(v);
   };
 

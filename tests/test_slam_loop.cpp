@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <map>
 #include <filesystem>
+#include <fstream>
 
 #include <gtest/gtest.h>
 
@@ -276,18 +277,48 @@ TEST(SlamLoop, MissingVocabularyIsAnInputError) {
 namespace vslam {
 namespace {
 
+// tools/setup.sh trains the default where the training images are, as in
+// ../shared, which the tests need anyway (test_support.hpp): here it must be built.
 TEST(SlamLoop, DefaultVocabularyResolvesFromTheProjectRootAndLoads) {
   const std::filesystem::path previous = std::filesystem::current_path();
   std::filesystem::current_path(test::scratchDir("SlamLoop_DefaultVocabulary"));
   const std::string resolved = resolveVocabularyPath(LoopParams{}.vocabulary);
   std::filesystem::current_path(previous);
-  EXPECT_EQ(std::filesystem::path(resolved), test::sourceDir() / "vocab" / "orbvoc.bin");
+  EXPECT_EQ(std::filesystem::path(resolved), test::sourceDir() / "vocab" / "orbvoc_k10_L6.bin")
+      << "tools/setup.sh (tools/build_vocab.sh) did not build the default vocabulary";
   const Vocabulary vocabulary = Vocabulary::load(resolved);
   EXPECT_EQ(vocabulary.branching(), 10);
-  EXPECT_EQ(vocabulary.depth(), 5);  // not ORB-SLAM's 6: under 5 MB (vocab/README.md)
-  EXPECT_GT(vocabulary.wordCount(), 90000u);
+  EXPECT_EQ(vocabulary.depth(), 6);  // ORB-SLAM's shape
+  EXPECT_EQ(vocabulary.wordCount(), 456058u);  // vocab/README.md
   // A path that exists nowhere is returned as given, for the loader to report.
   EXPECT_EQ(resolveVocabularyPath("no/such/vocab.bin"), "no/such/vocab.bin");
+}
+
+TEST(SlamLoop, CommittedVocabularyIsKTenLFive) {
+  const Vocabulary vocabulary = Vocabulary::load((test::sourceDir() / LoopParams::kFallbackVocabulary).string());
+  EXPECT_EQ(vocabulary.branching(), 10);
+  EXPECT_EQ(vocabulary.depth(), 5);
+  EXPECT_EQ(vocabulary.wordCount(), 96326u);  // vocab/README.md
+}
+
+// Where the default could not be trained, it resolves to the committed L = 5
+// file; any other missing path stays missing, for the loader to report.
+TEST(SlamLoop, DefaultVocabularyFallsBackToTheCommittedOneOnlyWhenNotBuilt) {
+  const std::filesystem::path root = test::scratchDir("SlamLoop_VocabularyFallback");
+  const std::filesystem::path previous = std::filesystem::current_path();
+  std::filesystem::current_path(test::scratchDir("SlamLoop_VocabularyFallback_cwd"));
+  std::filesystem::create_directories(root / "vocab");
+  std::ofstream(root / LoopParams::kFallbackVocabulary) << "L5";
+  const std::string without_default = resolveVocabularyPath(LoopParams::kDefaultVocabulary, root.string());
+  const std::string other_missing = resolveVocabularyPath("vocab/other.bin", root.string());
+  std::ofstream(root / LoopParams::kDefaultVocabulary) << "L6";
+  const std::string with_default = resolveVocabularyPath(LoopParams::kDefaultVocabulary, root.string());
+  const std::string fallback_asked = resolveVocabularyPath(LoopParams::kFallbackVocabulary, root.string());
+  std::filesystem::current_path(previous);
+  EXPECT_EQ(std::filesystem::path(without_default), root / LoopParams::kFallbackVocabulary);
+  EXPECT_EQ(other_missing, "vocab/other.bin");
+  EXPECT_EQ(std::filesystem::path(with_default), root / LoopParams::kDefaultVocabulary);
+  EXPECT_EQ(std::filesystem::path(fallback_asked), root / LoopParams::kFallbackVocabulary);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs vslam's build dependencies from Debian's archive (idempotent,
-# non-interactive), then configures and builds into ./build.
+# non-interactive), then configures and builds into ./build, and trains the
+# default vocabulary where its training images are (tools/build_vocab.sh).
 #   tools/setup.sh [--build-dir DIR] [--skip-install] [--sanitize address|thread] [--target NAME]...
 # --sanitize configures a sanitizer build (no benchmarks); --target (repeatable)
 # builds only the named CMake targets instead of everything.
@@ -66,4 +67,7 @@ if [ ${#targets[@]} -gt 0 ]; then
   echo "setup.sh: built ${targets[*]} in $build_dir" >&2
 else
   echo "setup.sh: built $build_dir/vslam" >&2
+  # The default vocabulary (k = 10, L = 6) is over 5 MB and not committed: train
+  # it where its images are (vocab/README.md); elsewhere vocab/orbvoc.bin serves.
+  [ -n "$sanitize" ] || tools/build_vocab.sh --build-dir "$build_dir"
 fi

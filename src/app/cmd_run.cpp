@@ -161,7 +161,8 @@ Command addRunCommand(CLI::App& app) {
   addDetectorOptions(*cli, options->detector);
   cli->add_option("--vocabulary", options->vocabulary,
                   "Place-recognition vocabulary (ours or DBoW2's ORBvoc.txt) for relocalisation and loop closing "
-                  "(default: the config's loop.vocabulary, vocab/orbvoc.bin)");
+                  "(default: the config's loop.vocabulary, vocab/orbvoc_k10_L6.bin, which tools/setup.sh trains where "
+                  "the training images are, else the committed vocab/orbvoc.bin)");
   cli->add_flag("--no-loop", options->no_loop, "Disable loop closing (relocalisation stays on)");
   cli->add_flag("--no-final-ba", options->no_final_ba, "Skip the full bundle adjustment after the last frame");
   cli->add_flag("--deterministic", options->pipeline.deterministic,

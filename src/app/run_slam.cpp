@@ -660,6 +660,7 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   report["realtime"] = options.realtime;
   report["frames_dropped"] = outcome.frames_dropped;
   report["camera"] = sequence.config.camera.name;
+  report["vocabulary"] = system.vocabularyPath().empty() ? nlohmann::json() : nlohmann::json(system.vocabularyPath());
   report["frames_expected"] = sequence.frames_expected > 0 ? nlohmann::json(sequence.frames_expected) : nullptr;
   report["frames_total"] = stats.frames;
   report["frames_processed"] = stats.frames;

@@ -405,12 +405,16 @@ void requireDepthCamera(const Config& config) {
                        "' for RGB-D (fx times the virtual baseline in metres; ORB-SLAM2 uses 40 for TUM)");
 }
 
-std::string resolveVocabularyPath(const std::string& path) {
+std::string resolveVocabularyPath(const std::string& path, const std::string& project_root) {
   namespace fs = std::filesystem;
   if (path.empty() || fs::exists(path) || fs::path(path).is_absolute()) return path;
-  const fs::path in_project = fs::path(VSLAM_SOURCE_DIR) / path;
-  return fs::exists(in_project) ? in_project.string() : path;
+  const fs::path in_project = fs::path(project_root) / path;
+  if (fs::exists(in_project)) return in_project.string();
+  if (path == LoopParams::kDefaultVocabulary) return resolveVocabularyPath(LoopParams::kFallbackVocabulary, project_root);
+  return path;
 }
+
+std::string resolveVocabularyPath(const std::string& path) { return resolveVocabularyPath(path, VSLAM_SOURCE_DIR); }
 
 std::string projectConfigDir() { return std::string(VSLAM_SOURCE_DIR) + "/config"; }
 

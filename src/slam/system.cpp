@@ -1,5 +1,6 @@
 #include "vslam/slam/system.hpp"
 
+#include <filesystem>
 #include <stdexcept>
 
 #include <spdlog/spdlog.h>
@@ -34,6 +35,10 @@ System::System(const Config& config, const SystemOptions& options)
   if (!config_.loop.vocabulary.empty()) {
     vocabulary_path_ = resolveVocabularyPath(config_.loop.vocabulary);
     vocabulary_ = std::make_unique<Vocabulary>(Vocabulary::load(vocabulary_path_));
+    if (config_.loop.vocabulary == LoopParams::kDefaultVocabulary &&
+        std::filesystem::path(vocabulary_path_).filename() != std::filesystem::path(LoopParams::kDefaultVocabulary).filename())
+      spdlog::info("vocabulary: {} (k = {}, L = {}); the default {} is not built here (vocab/README.md)",
+                   vocabulary_path_, vocabulary_->branching(), vocabulary_->depth(), LoopParams::kDefaultVocabulary);
     database_ = std::make_unique<KeyframeDatabase>();
     if (config_.loop.enabled)
       loop_closing_ =

@@ -67,13 +67,23 @@ struct LoopParams {
   // Place-recognition vocabulary for relocalisation and loop detection. A
   // relative path not found from the working directory is taken from the
   // project root (resolveVocabularyPath).
-  std::string vocabulary = "vocab/orbvoc.bin";
+  std::string vocabulary = kDefaultVocabulary;
+
+  // ORB-SLAM's shape (k = 10, L = 6). Over 5 MB, so it is not in the
+  // repository: tools/setup.sh trains it where the training images are
+  // (vocab/README.md).
+  static constexpr const char* kDefaultVocabulary = "vocab/orbvoc_k10_L6.bin";
+  // The committed k = 10, L = 5 vocabulary, used in the default's place
+  // where it could not be built.
+  static constexpr const char* kFallbackVocabulary = "vocab/orbvoc.bin";
 };
 
 // The vocabulary file `LoopParams::vocabulary` names: as given if it exists,
 // else relative to the project root; as given when neither exists (the
-// loader then reports it missing).
+// loader then reports it missing). The default (kDefaultVocabulary) found in
+// neither place resolves to kFallbackVocabulary the same way.
 std::string resolveVocabularyPath(const std::string& path);
+std::string resolveVocabularyPath(const std::string& path, const std::string& project_root);
 
 // Which frames the detection network sees (issue 15); the frames in between
 // get the last boxes carried along by their keypoints' motion.

@@ -175,6 +175,8 @@ class System {
   // otherwise mapping continues in it. Returns the keyframes and points loaded.
   std::pair<int, int> loadMap(const std::string& path, bool localize);
   int lastMatchedPoints() const;  // before the pose optimisation's outlier rejection
+  // The vocabulary file loaded ("" without one), as resolveVocabularyPath found it.
+  const std::string& vocabularyPath() const { return vocabulary_path_; }
   StageTimer& timer() { return timer_; }
   // Loop Closing's bookkeeping (empty state without it); waits for the keyframe in hand.
   LoopClosingState loopClosingState() const;

@@ -155,5 +155,38 @@ TEST(TrackingAfterRelocalisation, AGuidedSearchAddsTheCandidatesOtherPoints) {
   EXPECT_LT(Eigen::AngleAxisd(frame.T_cw.R.transpose() * tracked.last.T_cw.R).angle(), 0.1 * M_PI / 180);
 }
 
+
+// Ours, after a relocalisation: when the next frame's reference keyframe
+// gives too few matches, the relocalised frame's points are searched at its
+// pose (a camera at rest). One frame of the room later (2.5 cm, 0.7 degrees of
+// motion at 30 Hz) that finds the same pose as the motion model does.
+TEST(TrackingAfterRelocalisation, TheNextFrameCanBeTrackedFromTheLastFrameAtRest) {
+  RoomLoopParams room;
+  const std::vector<StampedPose> path = roomLoopPath(room);
+  constexpr long kFrames = 40;
+  RoomLoopRenderer renderer(room);
+  Config config;
+  config.camera = room.camera;
+  config.detector.model = "none";
+  config.loop.vocabulary.clear();
+  TrackedRoom resting(config), moving(config);
+  for (long k = 0; k < kFrames; ++k) {
+    const cv::Mat image = renderer.render(path[k].T_wc).clone();
+    resting.track(k, image);
+    moving.track(k, image);
+  }
+  ASSERT_EQ(resting.tracking.state(), TrackingState::Ok);
+  const cv::Mat next_image = renderer.render(path[kFrames].T_wc).clone();
+
+  Frame at_rest = resting.builder.build(kFrames, static_cast<int>(kFrames), 0.1 * kFrames, next_image, cv::Mat());
+  ASSERT_TRUE(resting.tracking.trackFromLastFrameAtRest(at_rest));
+  EXPECT_EQ(resting.tracking.framesTrackedAtRest(), 1);
+  EXPECT_GE(at_rest.trackedCount(), 50);
+  ASSERT_TRUE(moving.track(kFrames, next_image));  // the motion model, then the local map
+  EXPECT_EQ(moving.tracking.framesTrackedAtRest(), 0);
+  EXPECT_LT((at_rest.T_cw.t - moving.last.T_cw.t).norm(), 5e-3);
+  EXPECT_LT(Eigen::AngleAxisd(at_rest.T_cw.R.transpose() * moving.last.T_cw.R).angle(), 0.2 * M_PI / 180);
+}
+
 }  // namespace
 }  // namespace vslam

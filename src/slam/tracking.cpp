@@ -148,6 +148,13 @@ bool Tracking::track(Frame& frame) {
       if (!ok) ++motion_model_misses_;
     }
     if (!ok) ok = trackReferenceKeyFrame(frame);
+    // Right after a relocalisation the keyframe it was found from may see the
+    // place from afar; the relocalised frame is the nearest view.
+    if (!ok && last_relocalisation_frame_id_ >= 0 && !motionModelAllowed(frame.id, last_relocalisation_frame_id_)) {
+      ok = trackFromLastFrameAtRest(frame);
+      spdlog::info("frame {}: its reference keyframe failed after the relocalisation; from the last frame at rest: {}",
+                   frame.index, ok ? "tracked" : "failed");
+    }
   } else {
     // Lost: relocalise against the whole map by place recognition; without a
     // vocabulary, retry the reference keyframe.
@@ -540,6 +547,13 @@ bool Tracking::trackWithMotionModel(Frame& frame) {
   odometry_only_ = tracked && map_inliers < 10;
   if (odometry_only_) matches_inliers_ = map_inliers;
   return tracked;
+}
+
+bool Tracking::trackFromLastFrameAtRest(Frame& frame) {
+  if (!last_frame_ || !last_frame_->has_pose) return false;
+  velocity_ = SE3();
+  ++frames_tracked_at_rest_;
+  return trackWithMotionModel(frame);
 }
 
 bool Tracking::trackByOdometryOrRelocalise(Frame& frame) {

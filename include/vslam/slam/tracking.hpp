@@ -99,6 +99,7 @@ class Tracking {
   int keyframeWaits() const { return keyframe_waits_; }  // keyframes that waited for Local Mapping
   // Frames the constant-velocity model failed to track (the reference keyframe was tried instead).
   int motionModelMisses() const { return motion_model_misses_; }
+  int framesTrackedAtRest() const { return frames_tracked_at_rest_; }  // trackFromLastFrameAtRest's attempts
   bool localizingByOdometry() const { return odometry_only_; }
 
   // A map loaded from a file (System::loadMap): the first frame relocalises
@@ -150,6 +151,12 @@ class Tracking {
   // points by projection (10 px, then 3 px) and optimises again. Returns the
   // inliers kept; relocalisation succeeds at 50.
   int refineRelocalisedPose(Frame& frame, const KeyFrame& candidate);
+  // The frame right after a relocalisation, when its reference keyframe gives
+  // too few matches: the last (relocalised) frame's points are searched by
+  // projection at the last frame's pose, a camera at rest, and the pose is
+  // optimised (ours; ORB-SLAM2 is lost again and relocalises the next frame).
+  // True with 10 inliers, as the motion model.
+  bool trackFromLastFrameAtRest(Frame& frame);
   int lastTrackedPoints() const { return last_tracked_points_; }
   // Map points matched in the last frame's local-map search, before the pose
   // optimisation rejected outliers (0 when it was not tracked).
@@ -225,6 +232,7 @@ class Tracking {
   int map_resets_ = 0;
   int keyframe_waits_ = 0;
   int motion_model_misses_ = 0;
+  int frames_tracked_at_rest_ = 0;
   bool last_keyframe_was_weak_ = false;  // made with fewer than min_tracked_points tracked
   bool map_loaded_ = false;          // started in a loaded map: never reset it
   bool localization_only_ = false;   // --localize: the map is read, never changed

@@ -34,6 +34,16 @@ struct TrackedRoom {
   Frame last;
 };
 
+// The room's camera, no detector, no vocabulary (relocalisation retries the
+// reference keyframe): Tracking alone on exact geometry.
+Config roomTrackingConfig(const RoomLoopParams& room) {
+  Config config;
+  config.camera = room.camera;
+  config.detector.model = "none";
+  config.loop.vocabulary.clear();
+  return config;
+}
+
 // Moves the whole map into another world frame: p' = G p, T_cw' = T_cw G^-1,
 // as a loop correction or a local BA moves the keyframes under Tracking.
 void moveWorld(Map& map, const SE3& G) {
@@ -60,10 +70,7 @@ TEST(TrackingMotionModel, PredictionFollowsAMapCorrection) {
     RoomLoopRenderer renderer(room);
     for (long k = 0; k <= kFramesBeforeMove; ++k) images.push_back(renderer.render(path[k].T_wc).clone());
   }
-  Config config;
-  config.camera = room.camera;
-  config.detector.model = "none";
-  config.loop.vocabulary.clear();
+  const Config config = roomTrackingConfig(room);
 
   TrackedRoom moved(config), still(config);
   for (long k = 0; k < kFramesBeforeMove; ++k) {
@@ -117,10 +124,7 @@ TEST(TrackingAfterRelocalisation, AGuidedSearchAddsTheCandidatesOtherPoints) {
   const std::vector<StampedPose> path = roomLoopPath(room);
   constexpr long kFrames = 40;
   RoomLoopRenderer renderer(room);
-  Config config;
-  config.camera = room.camera;
-  config.detector.model = "none";
-  config.loop.vocabulary.clear();
+  const Config config = roomTrackingConfig(room);
   TrackedRoom tracked(config);
   cv::Mat image;
   for (long k = 0; k <= kFrames; ++k) {
@@ -155,7 +159,6 @@ TEST(TrackingAfterRelocalisation, AGuidedSearchAddsTheCandidatesOtherPoints) {
   EXPECT_LT(Eigen::AngleAxisd(frame.T_cw.R.transpose() * tracked.last.T_cw.R).angle(), 0.1 * M_PI / 180);
 }
 
-
 // Ours, after a relocalisation: when the next frame's reference keyframe
 // gives too few matches, the relocalised frame's points are searched at its
 // pose (a camera at rest). One frame of the room later (2.5 cm, 0.7 degrees of
@@ -165,10 +168,7 @@ TEST(TrackingAfterRelocalisation, TheNextFrameCanBeTrackedFromTheLastFrameAtRest
   const std::vector<StampedPose> path = roomLoopPath(room);
   constexpr long kFrames = 40;
   RoomLoopRenderer renderer(room);
-  Config config;
-  config.camera = room.camera;
-  config.detector.model = "none";
-  config.loop.vocabulary.clear();
+  const Config config = roomTrackingConfig(room);
   TrackedRoom resting(config), moving(config);
   for (long k = 0; k < kFrames; ++k) {
     const cv::Mat image = renderer.render(path[k].T_wc).clone();
@@ -180,10 +180,10 @@ TEST(TrackingAfterRelocalisation, TheNextFrameCanBeTrackedFromTheLastFrameAtRest
 
   Frame at_rest = resting.builder.build(kFrames, static_cast<int>(kFrames), 0.1 * kFrames, next_image, cv::Mat());
   ASSERT_TRUE(resting.tracking.trackFromLastFrameAtRest(at_rest));
-  EXPECT_EQ(resting.tracking.framesTrackedAtRest(), 1);
+  EXPECT_EQ(resting.tracking.atRestAttempts(), 1);
   EXPECT_GE(at_rest.trackedCount(), 50);
   ASSERT_TRUE(moving.track(kFrames, next_image));  // the motion model, then the local map
-  EXPECT_EQ(moving.tracking.framesTrackedAtRest(), 0);
+  EXPECT_EQ(moving.tracking.atRestAttempts(), 0);
   EXPECT_LT((at_rest.T_cw.t - moving.last.T_cw.t).norm(), 5e-3);
   EXPECT_LT(Eigen::AngleAxisd(at_rest.T_cw.R.transpose() * moving.last.T_cw.R).angle(), 0.2 * M_PI / 180);
 }

@@ -300,11 +300,11 @@ Config loadOrbSlamSettings(const std::string& text, const std::string& path) {
       if (required) throw InputError(path, 0, std::string("missing required key '") + key + "'");
       return;
     }
+    // The text is trimmed: the whole of it must be the number.
     const SettingsValue& value = it->second;
-    const char* begin = value.text.c_str();
     char* end = nullptr;
-    const double parsed = value.text.empty() || value.quoted ? 0.0 : std::strtod(begin, &end);
-    if (value.text.empty() || value.quoted || end != begin + value.text.size() || std::isspace(static_cast<unsigned char>(begin[0])))
+    const double parsed = std::strtod(value.text.c_str(), &end);
+    if (value.quoted || value.text.empty() || end != value.text.c_str() + value.text.size())
       throw InputError(path, value.line, std::string("key '") + key + "' has the wrong type (expected a number, got '" +
                                              value.text + "')");
     if (!std::isfinite(parsed)) throw InputError(path, value.line, std::string("key '") + key + "' is not a finite number");
@@ -315,10 +315,9 @@ Config loadOrbSlamSettings(const std::string& text, const std::string& path) {
   auto integer = [&](const char* key, int& out) {
     double v = out;
     number(key, v, false);
-    if (v != std::trunc(v) || v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max()) {
-      const int line = values.count(key) ? values.at(key).line : 0;
-      throw InputError(path, line, std::string("key '") + key + "' must be an integer, got " + std::to_string(v));
-    }
+    // `out` is an int, so only a value read from the file can fail here.
+    if (v != std::trunc(v) || v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max())
+      throw InputError(path, values.at(key).line, std::string("key '") + key + "' must be an integer, got " + std::to_string(v));
     out = static_cast<int>(v);
   };
 

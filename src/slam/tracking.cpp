@@ -552,7 +552,7 @@ bool Tracking::trackWithMotionModel(Frame& frame) {
 bool Tracking::trackFromLastFrameAtRest(Frame& frame) {
   if (!last_frame_ || !last_frame_->has_pose) return false;
   velocity_ = SE3();
-  ++frames_tracked_at_rest_;
+  ++at_rest_attempts_;
   return trackWithMotionModel(frame);
 }
 

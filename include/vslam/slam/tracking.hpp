@@ -99,7 +99,7 @@ class Tracking {
   int keyframeWaits() const { return keyframe_waits_; }  // keyframes that waited for Local Mapping
   // Frames the constant-velocity model failed to track (the reference keyframe was tried instead).
   int motionModelMisses() const { return motion_model_misses_; }
-  int framesTrackedAtRest() const { return frames_tracked_at_rest_; }  // trackFromLastFrameAtRest's attempts
+  int atRestAttempts() const { return at_rest_attempts_; }  // calls of trackFromLastFrameAtRest, tracked or not
   bool localizingByOdometry() const { return odometry_only_; }
 
   // A map loaded from a file (System::loadMap): the first frame relocalises
@@ -232,7 +232,7 @@ class Tracking {
   int map_resets_ = 0;
   int keyframe_waits_ = 0;
   int motion_model_misses_ = 0;
-  int frames_tracked_at_rest_ = 0;
+  int at_rest_attempts_ = 0;
   bool last_keyframe_was_weak_ = false;  // made with fewer than min_tracked_points tracked
   bool map_loaded_ = false;          // started in a loaded map: never reset it
   bool localization_only_ = false;   // --localize: the map is read, never changed

@@ -55,6 +55,12 @@ TEST(CliRun, KittiAndMaxFramesAndOutputFolder) {
   EXPECT_EQ(report["frames_total"], 10);
   EXPECT_EQ(report["camera"], "kitti_00-02");
   EXPECT_EQ(report["sequence"], "kitti/00");
+  // Every frame but the first is extracted ahead, on the extraction thread,
+  // except the one after the map starts: it was submitted with the count of
+  // a monocular start (twice the features) and is extracted again.
+  const int started_at = report["initialised_at_frame"].get<int>();
+  ASSERT_GE(started_at, 1);
+  EXPECT_EQ(report["frames_extracted_ahead"], started_at < 9 ? 8 : 9);
 }
 
 // --realtime plays the frames at their timestamps: the run lasts at least as
@@ -70,6 +76,7 @@ TEST(CliRun, RealtimePlaysAtTheTimestampsAndCountsDroppedFrames) {
   EXPECT_EQ(report["frames_total"].get<int>() + report["frames_dropped"].get<int>(), 60);
   // 60 frames at 30 Hz: the last arrives 59 / 30 s after the first.
   EXPECT_GE(report["wall_s"].get<double>(), 59.0 / 30.0 - 0.05);
+  EXPECT_EQ(report["frames_extracted_ahead"], 0);  // which frame comes next is not known
 
   const Outcome both = vslam("run --seq tum/fr3_teddy --max-frames 5 --realtime --deterministic --out " +
                              quoted((out.parent_path() / "both").string()));

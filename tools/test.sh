@@ -14,7 +14,7 @@ cd "$(dirname "$0")/.."
 # The whole-sequence threaded fr1_xyz run is left out: under TSan it would
 # exceed ctest's 400 s timeout; the room loop covers loop closing, culling and
 # the full-BA merge on threads.
-sanitize_tests=${VSLAM_SANITIZE_TESTS:-'MapGraph|LoopScaleRule|AsyncDetector|DetectionStage|SlamThreaded\.(Reset|LocalMappingFailure|CirclingARoomClosesAVerifiedLoopEveryRun)|SlamRgbd\.RoomWithExactDepthIsMetric|RgbdFrame'}
+sanitize_tests=${VSLAM_SANITIZE_TESTS:-'MapGraph|LoopScaleRule|AsyncDetector|ExtractionAhead|DetectionStage|SlamThreaded\.(Reset|LocalMappingFailure|CirclingARoomClosesAVerifiedLoopEveryRun)|SlamRgbd\.RoomWithExactDepthIsMetric|RgbdFrame'}
 
 sanitize=
 if [ "${1:-}" = --sanitize ]; then

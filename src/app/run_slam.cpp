@@ -681,6 +681,7 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
   report["map_resets"] = stats.map_resets;
   report["implausible_loops_rejected"] = stats.implausible_loops_rejected;
   if (!mono) report["frames_without_depth"] = stats.frames_without_depth;
+  report["frames_extracted_ahead"] = stats.frames_extracted_ahead;
   report["groundtruth_file"] = sequence.groundtruth_path;
   if (sequence.hasGroundTruth() && end > begin) {
     write([&] {

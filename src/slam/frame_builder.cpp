@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include <opencv2/imgproc.hpp>
 
@@ -60,8 +61,28 @@ Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& b
   return build(id, index, timestamp, bgr, depth_m, n_features, boxes, filter, nullptr);
 }
 
+ExtractedFeatures FrameBuilder::extractFeatures(const cv::Mat& bgr, int n_features) const {
+  ExtractedFeatures features;
+  features.n_features = resolvedFeatureCount(n_features);
+  if (bgr.channels() == 3)
+    cv::cvtColor(bgr, features.gray, cv::COLOR_BGR2GRAY);
+  else
+    features.gray = bgr;
+  features.pyramid = extractor_.buildPyramid(features.gray);
+  const bool keep_corners = config_.detector.box_filter == "reuse";
+  extractor_.extract(features.pyramid, features.keypoints, features.descriptors, cv::Rect(), features.n_features,
+                     keep_corners ? &features.corners : nullptr);
+  return features;
+}
+
 Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m,
                           int n_features, const BoxSource& boxes, FrameFilterResult* filter,
+                          FeatureSnapshot* own_features) const {
+  return build(id, index, timestamp, bgr, depth_m, extractFeatures(bgr, n_features), boxes, filter, own_features);
+}
+
+Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m,
+                          ExtractedFeatures features, const BoxSource& boxes, FrameFilterResult* filter,
                           FeatureSnapshot* own_features) const {
   Frame frame;
   frame.id = id;
@@ -70,16 +91,12 @@ Frame FrameBuilder::build(long id, int index, double timestamp, const cv::Mat& b
   frame.camera = &camera_;
   frame.pyramid = &pyramid_;
 
-  cv::Mat gray;
-  if (bgr.channels() == 3)
-    cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
-  else
-    gray = bgr;
-  const ImagePyramid image_pyramid = extractor_.buildPyramid(gray);
+  const cv::Mat& gray = features.gray;
+  const ImagePyramid& image_pyramid = features.pyramid;
   const bool reuse_corners = boxes && config_.detector.box_filter == "reuse";
-  OrbCorners corners;
-  extractor_.extract(image_pyramid, frame.keypoints, frame.descriptors, cv::Rect(), n_features,
-                     reuse_corners ? &corners : nullptr);
+  OrbCorners& corners = features.corners;
+  frame.keypoints = std::move(features.keypoints);
+  frame.descriptors = std::move(features.descriptors);
   // A copy: the boxes are carried by these after the filter has changed the frame's own.
   const FeatureSnapshot own{index, frame.keypoints, frame.descriptors.clone()};
   if (own_features) *own_features = own;

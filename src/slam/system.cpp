@@ -1,6 +1,8 @@
 #include "vslam/slam/system.hpp"
 
 #include <filesystem>
+#include <optional>
+#include <utility>
 #include <stdexcept>
 
 #include <spdlog/spdlog.h>
@@ -10,6 +12,7 @@
 #include "vslam/map_io/map_database.hpp"
 #include "vslam/place/keyframe_database.hpp"
 #include "vslam/place/vocabulary.hpp"
+#include "vslam/slam/extraction_ahead.hpp"
 #include "vslam/slam/frame_builder.hpp"
 #include "vslam/slam/local_mapping.hpp"
 #include "vslam/slam/loop_closing.hpp"
@@ -30,6 +33,7 @@ System::System(const Config& config, const SystemOptions& options)
                                            options.deterministic ? KeyFrameInsertion::Synchronous
                                            : options.realtime    ? KeyFrameInsertion::DropWhenBusy
                                                                  : KeyFrameInsertion::WaitForMapping)) {
+  if (!options.deterministic) extraction_ahead_ = std::make_unique<ExtractionAhead>(*frame_builder_, &timer_);
   if (options_.after_keyframe_mapped) local_mapping_->setAfterKeyFrameHook(options_.after_keyframe_mapped);
   // An empty vocabulary path switches place recognition off; a bad file is an input error.
   if (!config_.loop.vocabulary.empty()) {
@@ -82,7 +86,18 @@ LoopClosingState System::loopClosingState() const {
   return loop_closing_ ? loop_closing_->state() : LoopClosingState{};
 }
 
+int System::featuresToExtract() const {
+  // Monocular initialisation matches only the finest level: extract twice the
+  // features until the map exists, as ORB-SLAM does (RGB-D needs one frame).
+  const bool initialising =
+      tracking_->state() == TrackingState::NotInitialized && config_.sensor == SensorMode::Monocular;
+  return initialising ? 2 * config_.orb.n_features : -1;
+}
+
 void System::submitAhead(int index, const cv::Mat& image) {
+  // The count is the current state's guess: a frame that starts the map makes
+  // the next frame's job the wrong count, and that frame is extracted again.
+  if (extraction_ahead_) extraction_ahead_->submit(index, image, featuresToExtract());
   if (detection_) detection_->submitAhead(index, image);
 }
 
@@ -98,14 +113,15 @@ bool System::processFrame(int index, double timestamp, const cv::Mat& image, con
   FrameFilterResult filter;
   FeatureSnapshot own_features;
   {
+    // Tracking's time on the frame's features: waiting for those extracted
+    // ahead (or extracting them now), the keypoint filter, undistortion, depth.
     ScopedStage stage(&timer_, "extract");
-    // Monocular initialisation matches only the finest level: extract twice the
-    // features until the map exists, as ORB-SLAM does (RGB-D needs one frame).
-    const bool initialising =
-        tracking_->state() == TrackingState::NotInitialized && config_.sensor == SensorMode::Monocular;
-    const int n_features = initialising ? 2 * config_.orb.n_features : -1;
-    frame = frame_builder_->build(next_frame_id_++, index, timestamp, image, depth_m, n_features, boxes, &filter,
-                                  detection_ ? &own_features : nullptr);
+    const int n_features = featuresToExtract();
+    std::optional<ExtractedFeatures> features;
+    if (extraction_ahead_) features = extraction_ahead_->take(index, n_features);
+    if (!features) features = frame_builder_->extractFeatures(image, n_features);
+    frame = frame_builder_->build(next_frame_id_++, index, timestamp, image, depth_m, std::move(*features), boxes,
+                                  &filter, detection_ ? &own_features : nullptr);
   }
   if (detection_) {
     timer_.record("filter", filter.ms);
@@ -132,6 +148,10 @@ bool System::processFrame(int index, double timestamp, const cv::Mat& image, con
 bool System::finish(const FinishOptions& finish_options) {
   if (finished_) return false;
   finished_ = true;
+  if (extraction_ahead_) {  // no frame comes after this
+    frames_extracted_ahead_ = extraction_ahead_->jobsTaken();
+    extraction_ahead_.reset();
+  }
   if (options_.deterministic) {
     local_mapping_->processQueued();
     if (loop_closing_) loop_closing_->processQueued();
@@ -274,6 +294,7 @@ SystemStats System::stats() const {
   stats.map_resets = tracking_->mapResets();
   stats.keyframe_waits = tracking_->keyframeWaits();
   stats.frames_without_depth = frames_without_depth_;
+  stats.frames_extracted_ahead = extraction_ahead_ ? extraction_ahead_->jobsTaken() : frames_extracted_ahead_;
   const Tracking::MovingObjectStats& moving = tracking_->movingObjectStats();
   stats.moving_boxes_checked = moving.boxes_checked;
   stats.moving_boxes_moving = moving.moving;

@@ -5,7 +5,9 @@
 // Locking rule (the one place it is written down): keyframes, map points and
 // their graph links are read or written only while holding `Map::mutex()`.
 // Tracking holds it while it matches against and updates the map for a frame
-// (not during feature extraction or detection); Local Mapping and Loop Closing
+// (not during feature extraction or detection; the next frame's extraction
+// and detection run on threads of their own that never touch the map,
+// slam/extraction_ahead.hpp and detect/detection_stage.hpp); Local Mapping and Loop Closing
 // hold it for each step that reads or changes the map, and release it while
 // Ceres solves (they copy values into plain optimisation problems and copy the
 // results back under the lock). System::saveMap holds it once for the whole

@@ -24,6 +24,18 @@ struct FrameFilterResult {
   int frame_keypoints_reused = 0;
 };
 
+// A frame's own ORB features, before the keypoint filter: everything that
+// follows from the image alone, so it can be computed ahead of Tracking
+// (ExtractionAhead).
+struct ExtractedFeatures {
+  int n_features = 0;  // the count asked for, resolved (never < 0)
+  cv::Mat gray;
+  ImagePyramid pyramid;
+  OrbCorners corners;  // every FAST corner considered: only for detector.box_filter "reuse"
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;
+};
+
 // The boxes for a frame, given its own keypoints (before the filter).
 using BoxSource = std::function<std::vector<Detection>(const FeatureSnapshot& own_features)>;
 
@@ -48,6 +60,15 @@ class FrameBuilder {
   // frame's own keypoints and descriptors.
   Frame build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m, int n_features,
               const BoxSource& boxes, FrameFilterResult* filter, FeatureSnapshot* own_features) const;
+  // The same from features extractFeatures() computed for this image.
+  Frame build(long id, int index, double timestamp, const cv::Mat& bgr, const cv::Mat& depth_m,
+              ExtractedFeatures features, const BoxSource& boxes, FrameFilterResult* filter,
+              FeatureSnapshot* own_features) const;
+
+  // The image's own ORB features (`n_features` < 0: the configured number). A
+  // pure function of its arguments, safe to call from any thread.
+  ExtractedFeatures extractFeatures(const cv::Mat& bgr, int n_features = -1) const;
+  int resolvedFeatureCount(int n_features) const { return n_features < 0 ? config_.orb.n_features : n_features; }
 
   const ScalePyramid& pyramid() const { return pyramid_; }
   const PinholeCamera& camera() const { return camera_; }

@@ -25,6 +25,7 @@ class Map;
 class LocalMapping;
 class Tracking;
 class FrameBuilder;
+class ExtractionAhead;
 class Vocabulary;
 class KeyframeDatabase;
 class LoopClosing;
@@ -80,6 +81,7 @@ struct SystemStats {
   int keyframe_waits = 0;   // keyframes that waited for Local Mapping (back-pressure)
   int implausible_loops_rejected = 0;
   int frames_without_depth = 0;  // RGB-D: frames without a paired depth image, tracked as monocular
+  int frames_extracted_ahead = 0;  // frames whose ORB features were extracted on the extraction thread
   // With a loaded map (System::loadMap): tracked frames whose reference
   // keyframe came from the file, i.e. localised against the old map; -1 without one.
   int frames_in_loaded_map = -1;
@@ -136,9 +138,11 @@ class System {
   // With a detector, the frame's detections come first: those started by
   // submitAhead(), else detection runs now and Tracking waits for all of it.
   bool processFrame(int index, double timestamp, const cv::Mat& image, const cv::Mat& depth_m = cv::Mat());
-  // Starts detection on a frame processFrame() will get next, so that the
-  // network runs on its own thread while Tracking works on the current frame.
-  // Does nothing without a detector or when that frame was already submitted.
+  // Starts work on a frame processFrame() will get next, on threads of its
+  // own while Tracking works on the current frame: its ORB extraction (not
+  // with options.deterministic, where one thread works at a time) and its
+  // detection (with a detector, unless that frame was already submitted).
+  // `image` must not change until that frame has been processed.
   void submitAhead(int index, const cv::Mat& image);
   // Lets Local Mapping and Loop Closing finish their queues, stops the
   // threads, then runs the final full bundle adjustment (config.loop.final_ba
@@ -183,6 +187,8 @@ class System {
 
  private:
   bool runFinalBundleAdjustment(const FinishOptions& options);
+  // The ORB feature count for the next frame in the present tracking state (-1: the configured one).
+  int featuresToExtract() const;
   // With a rolling shutter, the camera's velocity at each keyframe, from the
   // tracked frames beside it (the final BA poses keyframes at their middle
   // rows); a monocular map's without its translation. Empty without one.
@@ -199,6 +205,7 @@ class System {
   std::unique_ptr<KeyframeDatabase> database_;
   std::unique_ptr<DetectionStage> detection_;  // nullptr for --detector none; before frame_builder_, which uses its class ids
   std::unique_ptr<FrameBuilder> frame_builder_;
+  std::unique_ptr<ExtractionAhead> extraction_ahead_;  // nullptr when deterministic
   std::unique_ptr<LocalMapping> local_mapping_;
   std::unique_ptr<Tracking> tracking_;
   std::unique_ptr<LoopClosing> loop_closing_;
@@ -207,6 +214,7 @@ class System {
   long loaded_max_keyframe_id_ = -1;  // keyframes up to this id came from a loaded map
   bool localize_ = false;             // loaded with localize: the map is never changed
   int frames_without_depth_ = 0;
+  int frames_extracted_ahead_ = 0;  // kept when extraction_ahead_ is stopped
   // What posing the frames again after the final BA found (System::finish).
   int frames_posed_again_ = 0;
   long refined_inlier_matches_ = 0;

@@ -357,6 +357,60 @@ TEST(BundleAdjust, NoisyLocalProblemWithHuber) {
   EXPECT_LT(outcome.max_rotation_error, test::degrees(0.2));
 }
 
+// Local Mapping leaves points that one keyframe alone sees out of its local
+// BA and carries them along with their keyframe (local_mapping.cpp): such a
+// point's coordinates absorb its one observation, stereo (3 rows) or
+// monocular (2 rows), so it adds nothing to the reduced camera system. Here:
+// the same noisy local problem with and without 40 such points (noisy
+// pixels, positions 5 cm off) gives the same free poses, and each stereo one
+// ends at its observation back-projected from its keyframe's new pose, where
+// carrying a point made from that observation puts it.
+TEST(BundleAdjust, PointsSeenByOneKeyframeLeaveThePosesAsTheyAre) {
+  const PinholeCamera camera = test::syntheticCamera();
+  const double bf = 40.0;
+  std::vector<SE3> truth;
+  const BundleProblem without = test::localBundleScene(camera, 8, 400, 1.0, 0.0, 7, &truth);
+  BundleProblem with = without;
+  std::mt19937 rng(8);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::vector<int> added;
+  for (int i = 0; i < 40; ++i) {
+    const int k = 1 + 2 * (i % 4);  // a free keyframe
+    const Vec3 p_w = test::pointSeenBy(camera, truth[k], 2.0, 8.0, rng);
+    BaObservation obs;
+    obs.keyframe = k;
+    obs.point = static_cast<int>(with.points.size());
+    obs.pixel = camera.project(truth[k] * p_w) + Vec2(gauss(rng), gauss(rng));
+    if (i % 2 == 0) obs.u_right = obs.pixel.x() - bf / (truth[k] * p_w).z() + gauss(rng);
+    added.push_back(obs.point);
+    with.points.push_back({1000 + i, p_w + 0.05 * test::randomUnitVector(rng), false});
+    with.observations.push_back(obs);
+  }
+  BundleProblem after_without = without;
+  const BundleResult result_without = bundleAdjust(camera, bf, after_without);
+  const BundleResult result_with = bundleAdjust(camera, bf, with);
+  // The same optimum; the two solves stop within the solver's tolerance of it.
+  for (size_t k = 0; k < without.keyframes.size(); ++k) {
+    if (without.keyframes[k].fixed) continue;
+    const SE3& a = after_without.keyframes[k].T_cw;
+    const SE3& b = with.keyframes[k].T_cw;
+    EXPECT_LT((a.t - b.t).norm(), 1e-5) << "keyframe " << k;
+    EXPECT_LT(test::rotationDifference(a.R, b.R), 1e-6) << "keyframe " << k;
+  }
+  for (size_t i = 0; i < without.observations.size(); ++i) EXPECT_EQ(result_with.outlier[i], result_without.outlier[i]);
+  // Each added point fits its one observation: carried with its keyframe, a
+  // point made from that observation stays fitted.
+  const ProjectionModel model(camera, bf);
+  for (size_t i = 0; i < added.size(); ++i) {
+    const BaObservation& obs = with.observations[without.observations.size() + i];
+    const ReprojectionCheck check = checkReprojection(model, with.keyframes[obs.keyframe].T_cw,
+                                                      with.points[added[i]].position_w, obs.pixel, obs.u_right,
+                                                      obs.inv_sigma2);
+    EXPECT_TRUE(check.depth_positive);
+    EXPECT_LT(check.chi2, 1e-4) << "point " << i;
+  }
+}
+
 TEST(BundleAdjust, NoisyLocalProblemWithCauchyCatchesEveryOutlier) {
   BundleOptions options;
   options.robust_loss = RobustLoss::Cauchy;

@@ -439,6 +439,7 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
   BundleProblem problem;
   std::vector<KeyFrame*> keyframes;
   std::vector<MapPoint*> points;
+  std::vector<std::pair<MapPoint*, KeyFrame*>> carried;  // seen by that keyframe alone
   {
     std::lock_guard<std::mutex> lock(map_.mutex());
     if (keyframe->isBad()) return;
@@ -454,7 +455,14 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
       for (MapPoint* point : kf->mapPoints()) {
         if (!point || point->isBad() || point->ba_local_for_kf == keyframe->id()) continue;
         point->ba_local_for_kf = keyframe->id();
-        points.push_back(point);
+        // A point one keyframe alone sees tells nothing about that keyframe's
+        // pose: its 3 coordinates absorb its one observation (2 or 3 rows), so
+        // it adds nothing to the reduced camera system. It is left out of the
+        // problem and carried along with its keyframe afterwards.
+        if (point->observationCount() == 1)
+          carried.push_back({point, kf});
+        else
+          points.push_back(point);
       }
     // Fixed: every other keyframe that sees those points.
     std::vector<KeyFrame*> fixed;
@@ -494,6 +502,9 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
   options.iterations_second = config_.mapping.local_ba_iterations;
   options.abort_flag = &abort_ba_;
   if (!record_ba_path_.empty()) maybeRecordBundleProblem(keyframe->camera(), problem);
+  KeyFrameMap<SE3> pose_before;
+  for (size_t k = 0; k < keyframes.size(); ++k)
+    if (!problem.keyframes[k].fixed) pose_before[keyframes[k]] = problem.keyframes[k].T_cw;
   const BundleResult result = bundleAdjust(keyframe->camera(), keyframe->camera().bf, problem, options);
   ++local_ba_count_;
 
@@ -512,6 +523,13 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
     if (points[p]->isBad()) continue;
     points[p]->setPosition(problem.points[p].position_w);
     points[p]->updateNormalAndDepth(keyframe->pyramid());
+  }
+  for (const auto& [point, kf] : carried) {
+    if (point->isBad() || kf->isBad()) continue;
+    auto before = pose_before.find(kf);
+    if (before == pose_before.end()) continue;
+    point->setPosition(kf->pose().inverse() * (before->second * point->position()));
+    point->updateNormalAndDepth(keyframe->pyramid());
   }
 }
 

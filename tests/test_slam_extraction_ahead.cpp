@@ -4,7 +4,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "test_support.hpp"
+#include "feature_test_support.hpp"
 #include "vslam/core/config.hpp"
 #include "vslam/slam/extraction_ahead.hpp"
 
@@ -12,12 +12,9 @@ namespace vslam {
 namespace {
 
 cv::Mat tumImage(int k) {
-  const std::string path = (test::tumSequence("freiburg1_xyz") / "rgb").string();
-  std::vector<cv::String> files;
-  cv::glob(path + "/*", files);
-  EXPECT_GT(files.size(), static_cast<size_t>(k)) << path;
-  const cv::Mat image = cv::imread(files.at(k), cv::IMREAD_COLOR);
-  EXPECT_FALSE(image.empty()) << files.at(k);
+  const std::string path = test::tumRgbPath("freiburg1_xyz", k);
+  const cv::Mat image = cv::imread(path, cv::IMREAD_COLOR);
+  EXPECT_FALSE(image.empty()) << path;
   return image;
 }
 

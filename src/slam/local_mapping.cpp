@@ -439,7 +439,13 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
   BundleProblem problem;
   std::vector<KeyFrame*> keyframes;
   std::vector<MapPoint*> points;
-  std::vector<std::pair<MapPoint*, KeyFrame*>> carried;  // seen by that keyframe alone
+  // Points seen by one keyframe alone, with their coordinates in its camera.
+  struct CarriedPoint {
+    MapPoint* point;
+    KeyFrame* keyframe;
+    Vec3 p_c;
+  };
+  std::vector<CarriedPoint> carried;
   {
     std::lock_guard<std::mutex> lock(map_.mutex());
     if (keyframe->isBad()) return;
@@ -460,7 +466,7 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
         // it adds nothing to the reduced camera system. It is left out of the
         // problem and carried along with its keyframe afterwards.
         if (point->observationCount() == 1)
-          carried.push_back({point, kf});
+          carried.push_back({point, kf, kf->pose() * point->position()});
         else
           points.push_back(point);
       }
@@ -502,9 +508,6 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
   options.iterations_second = config_.mapping.local_ba_iterations;
   options.abort_flag = &abort_ba_;
   if (!record_ba_path_.empty()) maybeRecordBundleProblem(keyframe->camera(), problem);
-  KeyFrameMap<SE3> pose_before;
-  for (size_t k = 0; k < keyframes.size(); ++k)
-    if (!problem.keyframes[k].fixed) pose_before[keyframes[k]] = problem.keyframes[k].T_cw;
   const BundleResult result = bundleAdjust(keyframe->camera(), keyframe->camera().bf, problem, options);
   ++local_ba_count_;
 
@@ -524,12 +527,10 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
     points[p]->setPosition(problem.points[p].position_w);
     points[p]->updateNormalAndDepth(keyframe->pyramid());
   }
-  for (const auto& [point, kf] : carried) {
-    if (point->isBad() || kf->isBad()) continue;
-    auto before = pose_before.find(kf);
-    if (before == pose_before.end()) continue;
-    point->setPosition(kf->pose().inverse() * (before->second * point->position()));
-    point->updateNormalAndDepth(keyframe->pyramid());
+  for (const CarriedPoint& carried_point : carried) {
+    if (carried_point.point->isBad() || carried_point.keyframe->isBad()) continue;
+    carried_point.point->setPosition(carried_point.keyframe->pose().inverse() * carried_point.p_c);
+    carried_point.point->updateNormalAndDepth(keyframe->pyramid());
   }
 }
 

@@ -148,10 +148,6 @@ bool System::processFrame(int index, double timestamp, const cv::Mat& image, con
 bool System::finish(const FinishOptions& finish_options) {
   if (finished_) return false;
   finished_ = true;
-  if (extraction_ahead_) {  // no frame comes after this
-    frames_extracted_ahead_ = extraction_ahead_->jobsTaken();
-    extraction_ahead_.reset();
-  }
   if (options_.deterministic) {
     local_mapping_->processQueued();
     if (loop_closing_) loop_closing_->processQueued();
@@ -294,7 +290,7 @@ SystemStats System::stats() const {
   stats.map_resets = tracking_->mapResets();
   stats.keyframe_waits = tracking_->keyframeWaits();
   stats.frames_without_depth = frames_without_depth_;
-  stats.frames_extracted_ahead = extraction_ahead_ ? extraction_ahead_->jobsTaken() : frames_extracted_ahead_;
+  stats.frames_extracted_ahead = extraction_ahead_ ? extraction_ahead_->jobsTaken() : 0;
   const Tracking::MovingObjectStats& moving = tracking_->movingObjectStats();
   stats.moving_boxes_checked = moving.boxes_checked;
   stats.moving_boxes_moving = moving.moving;

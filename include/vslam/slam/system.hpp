@@ -214,7 +214,6 @@ class System {
   long loaded_max_keyframe_id_ = -1;  // keyframes up to this id came from a loaded map
   bool localize_ = false;             // loaded with localize: the map is never changed
   int frames_without_depth_ = 0;
-  int frames_extracted_ahead_ = 0;  // kept when extraction_ahead_ is stopped
   // What posing the frames again after the final BA found (System::finish).
   int frames_posed_again_ = 0;
   long refined_inlier_matches_ = 0;

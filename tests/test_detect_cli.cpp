@@ -130,6 +130,34 @@ TEST(DetectCommand, CudaTargetWithoutCudaIsAClearError) {
       << run.output;
 }
 
+// Timing a model whose weights are not at hand (issue 15's YOLOv4 figure):
+// the command writes weights of the size the cfg implies, and the detector
+// then loads and runs them (detecting nothing of note).
+TEST(DetectCommand, PlaceholderWeightsLoadAndRunUnderTheirCfg) {
+  const fs::path scratch = test::scratchDir("detect_cli_placeholder");
+  const fs::path weights = scratch / "yolov4-tiny.weights";
+  RunResult run = runVslam("detect --detector yolov4-tiny --placeholder-weights " + weights.string(), scratch);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  // yolov4-tiny: 20-byte header + 4 bytes for each of its 6,062,814 parameters.
+  EXPECT_EQ(fs::file_size(weights), 24251276u);
+  EXPECT_NE(run.output.find("detect nothing"), std::string::npos) << run.output;
+
+  const fs::path cfg = test::sharedModels() / "darknet-cfg/yolov4-tiny.cfg";
+  run = runVslam("detect --images " + (test::sharedData() / "images/dog.jpg").string() + " --detector-cfg " +
+                     cfg.string() + " --detector-weights " + weights.string() + " --input-size 416 --out " +
+                     (scratch / "out").string(),
+                 scratch);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  std::ifstream json(scratch / "out/detections.json");
+  const nlohmann::json report = nlohmann::json::parse(json);
+  EXPECT_EQ(report["model"], "custom");
+  EXPECT_EQ(report["input_size"], 416);
+
+  run = runVslam("detect --out " + (scratch / "none").string(), scratch);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.output, "error: vslam detect: --images is required (or --placeholder-weights)\n");
+}
+
 TEST(DetectCommand, BadInputsAreOneLineErrors) {
   const fs::path scratch = test::scratchDir("detect_cli_errors");
   RunResult run = runVslam("detect --images /nonexistent/photo.jpg --out " + (scratch / "out").string(), scratch);

@@ -95,6 +95,27 @@ TEST(ModelLocator, ExplicitPathsOverrideTheModel) {
   EXPECT_NE(message.find("--detector-weights"), std::string::npos) << message;
 }
 
+// Bug: with the default model name and another model's cfg and weights given
+// explicitly, the run was reported as the default model.
+TEST(ModelLocator, AnotherModelsCfgUnderAKnownNameIsCustom) {
+  const fs::path dir = test::sharedModels() / "yolo-fastest-1.1";
+  DetectorParams params = model("yolo-fastest-1.1-xl");
+  params.cfg = (dir / "yolo-fastest-1.1.cfg").string();
+  params.weights = (dir / "yolo-fastest-1.1.weights").string();
+  EXPECT_EQ(locateModel(params).name, "custom");
+  params = model("yolo-fastest-1.1");
+  params.cfg = (dir / "yolo-fastest-1.1.cfg").string();
+  params.weights = (dir / "yolo-fastest-1.1.weights").string();
+  EXPECT_EQ(locateModel(params).name, "yolo-fastest-1.1");  // its own cfg, given by path
+}
+
+TEST(ModelLocator, CfgAloneIsFoundWithoutTheWeights) {
+  unsetenv("VSLAM_MODELS");
+  // YOLOv4's weights are not in ../shared; its cfg is.
+  EXPECT_EQ(fs::path(locateModelCfg(model("yolov4"))).filename(), "yolov4.cfg");
+  EXPECT_NE(errorOf([] { locateModelCfg(model("yolov9")); }).find("yolov9"), std::string::npos);
+}
+
 TEST(ModelLocator, ManifestListsEveryKnownModelWithTheSameFiles) {
   std::ifstream manifest(test::sourceDir() / "models/manifest.tsv");
   ASSERT_TRUE(manifest);

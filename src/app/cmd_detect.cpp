@@ -18,6 +18,7 @@
 #include "commands.hpp"
 #include "detector_options.hpp"
 #include "vslam/core/error.hpp"
+#include "vslam/detect/darknet_weights.hpp"
 #include "vslam/detect/detector.hpp"
 #include "vslam/detect/keypoint_filter.hpp"
 #include "vslam/detect/model_locator.hpp"
@@ -32,6 +33,7 @@ struct DetectArgs {
   std::vector<std::string> inputs;
   std::string out_dir;
   bool filter_keypoints = false;
+  std::string placeholder_weights;
   DetectorOptions detector;
 };
 
@@ -98,10 +100,22 @@ KeypointFilterStats filterKeypoints(const DetectorParams& params, const std::vec
   return stats;
 }
 
+// Weights of the right size for a model whose trained weights are not at
+// hand (YOLOv4's cannot be had on every machine): timing runs only.
+int writePlaceholder(const DetectorParams& params, const std::string& weights_path) {
+  const std::string cfg = locateModelCfg(params);
+  writePlaceholderWeights(cfg, weights_path);
+  std::cout << "wrote " << weights_path << ": " << fs::file_size(weights_path) << " bytes of placeholder weights for "
+            << cfg << " (random numbers: for timing only, they detect nothing)\n";
+  return 0;
+}
+
 int runDetect(const DetectArgs& args) {
   DetectorParams params;
   applyDetectorOptions(args.detector, params);
   if (params.model == "none") throw InputError("vslam detect: --detector none leaves nothing to do; name a model");
+  if (!args.placeholder_weights.empty()) return writePlaceholder(params, args.placeholder_weights);
+  if (args.inputs.empty()) throw InputError("vslam detect: --images is required (or --placeholder-weights)");
   const std::vector<fs::path> images = listImages(args.inputs);  // folders: not recursive
   const ModelFiles files = locateModel(params);
   YoloDetector detector(params, files);
@@ -205,11 +219,16 @@ Command addDetectCommand(CLI::App& app) {
   auto args = std::make_shared<DetectArgs>();
   Command command;
   command.cli = app.add_subcommand("detect", "Run the object detector on images; write detections.json and annotated PNGs");
-  command.cli->add_option("--images", args->inputs, "Images or folders of images")->required()->expected(1, -1);
+  command.cli->add_option("--images", args->inputs, "Images or folders of images (required unless --placeholder-weights)")
+      ->expected(1, -1);
   command.cli->add_option("--out", args->out_dir, "Output folder (default runs/detect-<UTC time>)");
   command.cli->add_flag("--filter-keypoints", args->filter_keypoints,
                         "Also run ORB and the keypoint filter (paper's Algorithm 1): counts in the JSON, "
                         "frame keypoints green and added ones red in the PNGs");
+  command.cli->add_option("--placeholder-weights", args->placeholder_weights,
+                          "Write a weights file of the size the model's cfg implies, filled with small random "
+                          "numbers, to this path and exit (for timing a model whose weights are not at hand: it "
+                          "detects nothing)");
   addDetectorOptions(*command.cli, args->detector);
   command.run = [args] { return runDetect(*args); };
   return command;

@@ -75,38 +75,58 @@ std::vector<std::string> modelSearchRoots() {
   return roots;
 }
 
+namespace {
+
+const KnownModel* knownModel(const std::string& name) {
+  const auto known = std::find_if(knownModels().begin(), knownModels().end(),
+                                  [&](const KnownModel& model) { return model.name == name; });
+  return known == knownModels().end() ? nullptr : &*known;
+}
+
+std::string resolveModelFile(const DetectorParams& params, const std::string& explicit_path, const char* option,
+                             const std::string& file_name) {
+  if (!explicit_path.empty()) return explicitFile(explicit_path, option);
+  const std::string found = search(file_name);
+  if (found.empty())
+    throw InputError(file_name, 0,
+                     "not found for detector model '" + params.model + "'; looked in " + whereWeLooked() +
+                         "; download it with tools/fetch_models.sh " + params.model + " (or set $VSLAM_MODELS, or give " +
+                         option + ")");
+  return found;
+}
+
+}  // namespace
+
+std::string locateModelCfg(const DetectorParams& params) {
+  const KnownModel* known = knownModel(params.model);
+  if (!known && params.cfg.empty())
+    throw InputError("unknown detector model '" + params.model + "' (known: " + joinedNames() +
+                     "; or give --detector-cfg)");
+  return resolveModelFile(params, params.cfg, "--detector-cfg", known ? known->cfg_file : "");
+}
+
 ModelFiles locateModel(const DetectorParams& params) {
   ModelFiles files;
   files.name = params.model;
-  const auto known = std::find_if(knownModels().begin(), knownModels().end(),
-                                  [&](const KnownModel& model) { return model.name == params.model; });
+  const KnownModel* known = knownModel(params.model);
   const bool fully_explicit = !params.cfg.empty() && !params.weights.empty();
-  if (known == knownModels().end() && !fully_explicit)
+  if (!known && !fully_explicit)
     throw InputError("unknown detector model '" + params.model + "' (known: " + joinedNames() +
                      "; or give --detector-cfg and --detector-weights)");
-
-  auto resolve = [&](const std::string& explicit_path, const char* option, const std::string& file_name) {
-    if (!explicit_path.empty()) return explicitFile(explicit_path, option);
-    const std::string found = search(file_name);
-    if (found.empty())
-      throw InputError(file_name, 0,
-                       "not found for detector model '" + params.model + "'; looked in " + whereWeLooked() +
-                           "; download it with tools/fetch_models.sh " + params.model +
-                           " (or set $VSLAM_MODELS, or give " + option + ")");
-    return found;
-  };
-  files.cfg = resolve(params.cfg, "--detector-cfg", known != knownModels().end() ? known->cfg_file : "");
-  files.weights = resolve(params.weights, "--detector-weights", known != knownModels().end() ? known->weights_file : "");
+  files.cfg = resolveModelFile(params, params.cfg, "--detector-cfg", known ? known->cfg_file : "");
+  files.weights = resolveModelFile(params, params.weights, "--detector-weights", known ? known->weights_file : "");
   // Class names: the file beside the cfg first (it belongs to that model),
   // then the search. A custom model without one gets COCO's: every model here is COCO-trained.
-  const std::string names_file = known != knownModels().end() ? known->names_file : "coco.names";
+  const std::string names_file = known ? known->names_file : "coco.names";
   const fs::path beside_cfg = fs::path(files.cfg).parent_path() / names_file;
   std::error_code error;
   if (params.names.empty() && fs::is_regular_file(beside_cfg, error))
     files.names = beside_cfg.string();
   else
-    files.names = resolve(params.names, "--detector-names", names_file);
-  if (known == knownModels().end()) files.name = "custom";
+    files.names = resolveModelFile(params, params.names, "--detector-names", names_file);
+  // A cfg of another model is not the named model (the default name stays
+  // yolo-fastest-1.1-xl when only --detector-cfg and --detector-weights are given).
+  if (!known || fs::path(files.cfg).filename() != known->cfg_file) files.name = "custom";
   return files;
 }
 

@@ -18,7 +18,7 @@
 namespace vslam {
 
 struct ModelFiles {
-  std::string name;     // model name ("custom" when cfg and weights were given explicitly)
+  std::string name;     // model name; "custom" when the cfg used is not that model's cfg file
   std::string cfg;
   std::string weights;
   std::string names;
@@ -42,5 +42,8 @@ std::vector<std::string> modelSearchRoots();
 // that cannot be found (saying where it looked and how to fetch it).
 // Must not be called with params.model == "none".
 ModelFiles locateModel(const DetectorParams& params);
+
+// The cfg alone, by the same rule (for a model whose weights are not at hand).
+std::string locateModelCfg(const DetectorParams& params);
 
 }  // namespace vslam

@@ -152,6 +152,13 @@ TEST(DetectCommand, PlaceholderWeightsLoadAndRunUnderTheirCfg) {
   const nlohmann::json report = nlohmann::json::parse(json);
   EXPECT_EQ(report["model"], "custom");
   EXPECT_EQ(report["input_size"], 416);
+  EXPECT_NE(run.output.find("these weights have seen no training image"), std::string::npos) << run.output;
+
+  // Never written over an existing file (real weights, say).
+  run = runVslam("detect --detector yolov4-tiny --placeholder-weights " + weights.string(), scratch);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.output, "error: " + weights.string() +
+                            ": already exists; placeholder weights are not written over a file\n");
 
   run = runVslam("detect --out " + (scratch / "none").string(), scratch);
   EXPECT_EQ(run.exit_code, 2);

@@ -53,6 +53,7 @@ TEST(DarknetWeights, RealHeadersAreReadAndRealFilesPass) {
   EXPECT_EQ(header.major, 0);
   EXPECT_EQ(header.minor, 2);
   EXPECT_EQ(header.bytes(), 20);
+  EXPECT_EQ(header.seen, 16000000);  // images seen in training
   for (const char* name : {"yolo-fastest-1.1-xl", "yolo-fastest-1.1"})
     EXPECT_NO_THROW(checkWeightsFile((dir / (std::string(name) + ".cfg")).string(),
                                      (dir / (std::string(name) + ".weights")).string()));
@@ -163,6 +164,7 @@ TEST(DarknetWeights, PlaceholderHasExactlyTheExpectedSize) {
   writePlaceholderWeights(cfg, weights);
   EXPECT_EQ(fs::file_size(weights), 24251276u);
   EXPECT_NO_THROW(checkWeightsFile(cfg, weights));
+  EXPECT_EQ(readDarknetWeightsHeader(weights).seen, 0);  // what marks them as placeholders
 }
 
 }  // namespace

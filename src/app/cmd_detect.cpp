@@ -103,6 +103,9 @@ KeypointFilterStats filterKeypoints(const DetectorParams& params, const std::vec
 // Weights of the right size for a model whose trained weights are not at
 // hand (YOLOv4's cannot be had on every machine): timing runs only.
 int writePlaceholder(const DetectorParams& params, const std::string& weights_path) {
+  std::error_code error;
+  if (fs::exists(weights_path, error))
+    throw InputError(weights_path, 0, "already exists; placeholder weights are not written over a file");
   const std::string cfg = locateModelCfg(params);
   writePlaceholderWeights(cfg, weights_path);
   std::cout << "wrote " << weights_path << ": " << fs::file_size(weights_path) << " bytes of placeholder weights for "

@@ -230,6 +230,13 @@ DarknetWeightsHeader readDarknetWeightsHeader(std::istream& in, const std::strin
   header.major = version[0];
   header.minor = version[1];
   header.revision = version[2];
+  if (header.bytes() == 20) {
+    std::int64_t seen = 0;
+    if (in.read(reinterpret_cast<char*>(&seen), sizeof(seen))) header.seen = seen;
+  } else {
+    std::int32_t seen = 0;
+    if (in.read(reinterpret_cast<char*>(&seen), sizeof(seen))) header.seen = seen;
+  }
   return header;
 }
 

@@ -6,6 +6,7 @@
 #include <map>
 
 #include <opencv2/imgproc.hpp>
+#include <spdlog/spdlog.h>
 
 #include "vslam/core/error.hpp"
 #include "vslam/detect/darknet_weights.hpp"
@@ -97,6 +98,12 @@ YoloDetector::YoloDetector(const DetectorParams& params, const ModelFiles& files
     throw InputError("detector confidence and NMS thresholds must lie in [0, 1]");
 
   checkWeightsFile(files_.cfg, files_.weights);
+  // Placeholder weights load and run like trained ones; say so, since their
+  // boxes mean nothing.
+  if (readDarknetWeightsHeader(files_.weights).seen == 0)
+    spdlog::warn("{}: these weights have seen no training image (placeholder weights, as `vslam detect "
+                 "--placeholder-weights` writes): good for timing only, their detections mean nothing",
+                 files_.weights);
   const DarknetNetwork network = parseDarknetCfg(files_.cfg);
   class_names_ = readClassNames(files_.names);
   if (network.classes > 0 && static_cast<int>(class_names_.size()) != network.classes)

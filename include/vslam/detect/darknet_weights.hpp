@@ -45,6 +45,9 @@ DarknetNetwork parseDarknetCfg(std::istream& in, const std::string& cfg_path);
 // seen in training (int64 from version 0.2 on, int32 before).
 struct DarknetWeightsHeader {
   std::int32_t major = 0, minor = 2, revision = 0;
+  // Images seen in training: 0 in placeholder weights (writePlaceholderWeights);
+  // -1 when the file ends before the field.
+  std::int64_t seen = -1;
   int bytes() const;  // 20 or 16
 };
 

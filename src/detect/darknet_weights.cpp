@@ -244,13 +244,14 @@ std::int64_t expectedWeightsBytes(const DarknetNetwork& network, const DarknetWe
   return header.bytes() + 4 * network.parameterCount();
 }
 
-void checkWeightsFile(const std::string& cfg_path, const std::string& weights_path) {
+DarknetWeightsHeader checkWeightsFile(const std::string& cfg_path, const std::string& weights_path) {
   const DarknetNetwork network = parseDarknetCfg(cfg_path);
   const DarknetWeightsHeader header = readDarknetWeightsHeader(weights_path);
   std::error_code error;
   const auto actual = static_cast<std::int64_t>(std::filesystem::file_size(weights_path, error));
   if (error) throw InputError(weights_path, 0, "cannot read the size of the weights file: " + error.message());
   checkWeightsSize(network, header, actual, weights_path);
+  return header;
 }
 
 void checkWeightsSize(const DarknetNetwork& network, const DarknetWeightsHeader& header, std::int64_t actual,

@@ -97,10 +97,9 @@ YoloDetector::YoloDetector(const DetectorParams& params, const ModelFiles& files
       params_.nms_threshold > 1)
     throw InputError("detector confidence and NMS thresholds must lie in [0, 1]");
 
-  checkWeightsFile(files_.cfg, files_.weights);
   // Placeholder weights load and run like trained ones; say so, since their
   // boxes mean nothing.
-  if (readDarknetWeightsHeader(files_.weights).seen == 0)
+  if (checkWeightsFile(files_.cfg, files_.weights).seen == 0)
     spdlog::warn("{}: these weights have seen no training image (placeholder weights, as `vslam detect "
                  "--placeholder-weights` writes): good for timing only, their detections mean nothing",
                  files_.weights);

@@ -95,13 +95,16 @@ std::string resolveModelFile(const DetectorParams& params, const std::string& ex
   return found;
 }
 
+InputError unknownModel(const std::string& name, const std::string& explicit_options) {
+  return InputError("unknown detector model '" + name + "' (known: " + joinedNames() + "; or give " +
+                    explicit_options + ")");
+}
+
 }  // namespace
 
 std::string locateModelCfg(const DetectorParams& params) {
   const KnownModel* known = knownModel(params.model);
-  if (!known && params.cfg.empty())
-    throw InputError("unknown detector model '" + params.model + "' (known: " + joinedNames() +
-                     "; or give --detector-cfg)");
+  if (!known && params.cfg.empty()) throw unknownModel(params.model, "--detector-cfg");
   return resolveModelFile(params, params.cfg, "--detector-cfg", known ? known->cfg_file : "");
 }
 
@@ -110,9 +113,7 @@ ModelFiles locateModel(const DetectorParams& params) {
   files.name = params.model;
   const KnownModel* known = knownModel(params.model);
   const bool fully_explicit = !params.cfg.empty() && !params.weights.empty();
-  if (!known && !fully_explicit)
-    throw InputError("unknown detector model '" + params.model + "' (known: " + joinedNames() +
-                     "; or give --detector-cfg and --detector-weights)");
+  if (!known && !fully_explicit) throw unknownModel(params.model, "--detector-cfg and --detector-weights");
   files.cfg = resolveModelFile(params, params.cfg, "--detector-cfg", known ? known->cfg_file : "");
   files.weights = resolveModelFile(params, params.weights, "--detector-weights", known ? known->weights_file : "");
   // Class names: the file beside the cfg first (it belongs to that model),

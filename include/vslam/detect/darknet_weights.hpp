@@ -59,8 +59,9 @@ DarknetWeightsHeader readDarknetWeightsHeader(std::istream& in, const std::strin
 std::int64_t expectedWeightsBytes(const DarknetNetwork& network, const DarknetWeightsHeader& header);
 
 // Throws InputError naming the weights file, its size and the size the cfg
-// implies when they differ (or when the file is missing).
-void checkWeightsFile(const std::string& cfg_path, const std::string& weights_path);
+// implies when they differ (or when the file is missing). Returns the header
+// it read, so that a caller need not read it again.
+DarknetWeightsHeader checkWeightsFile(const std::string& cfg_path, const std::string& weights_path);
 // The comparison itself, for a weights file of `actual_bytes` bytes.
 void checkWeightsSize(const DarknetNetwork& network, const DarknetWeightsHeader& header, std::int64_t actual_bytes,
                       const std::string& weights_path);

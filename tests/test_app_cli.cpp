@@ -135,6 +135,21 @@ TEST(CliRun, HelpListsEveryOptionAndItsDefault) {
     EXPECT_TRUE(contains(help.out, option)) << option << "\n" << help.out;
 }
 
+TEST(CliRun, HeaderNamesAnotherModelsCfgAsCustom) {
+  // The header once printed the config's model name before the files were
+  // located, so another model's cfg and weights ran as "yolo-fastest-1.1-xl"
+  // while the summary and report.json said "custom".
+  const fs::path dir = test::sharedModels() / "yolo-fastest-1.1";
+  const Outcome run = vslam("run --seq tum/fr1_xyz --info --detector-cfg " + quoted((dir / "yolo-fastest-1.1.cfg").string()) +
+                            " --detector-weights " + quoted((dir / "yolo-fastest-1.1.weights").string()));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(contains(run.out, "detector: custom\n")) << run.out;
+  const Outcome own = vslam("run --seq tum/fr1_xyz --info --detector yolo-fastest-1.1 --detector-cfg " +
+                            quoted((dir / "yolo-fastest-1.1.cfg").string()));
+  ASSERT_EQ(own.exit_code, 0) << own.err;
+  EXPECT_TRUE(contains(own.out, "detector: yolo-fastest-1.1\n")) << own.out;  // its own cfg, given by path
+}
+
 TEST(CliRun, DetectorWritesObjectsAndReport) {
   const fs::path out = test::scratchDir("cli_run_detector");
   const Outcome run =

@@ -13,6 +13,7 @@
 #include "detector_options.hpp"
 #include "run_slam.hpp"
 #include "vslam/core/error.hpp"
+#include "vslam/detect/model_locator.hpp"
 #include "vslam/io/sequence.hpp"
 
 namespace vslam::app {
@@ -130,7 +131,7 @@ int run(RunCommandOptions options) {
     std::cout << "groundtruth: none\n";
   }
   std::cout << "mode: " << options.pipeline.mode << "\n";
-  std::cout << "detector: " << sequence.config.detector.model << "\n";
+  std::cout << "detector: " << runModelName(sequence.config.detector) << "\n";
   std::cout << "deterministic: " << (options.pipeline.deterministic ? "yes" : "no") << "\n";
 
   std::cout.flush();

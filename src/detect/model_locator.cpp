@@ -110,7 +110,6 @@ std::string locateModelCfg(const DetectorParams& params) {
 
 ModelFiles locateModel(const DetectorParams& params) {
   ModelFiles files;
-  files.name = params.model;
   const KnownModel* known = knownModel(params.model);
   const bool fully_explicit = !params.cfg.empty() && !params.weights.empty();
   if (!known && !fully_explicit) throw unknownModel(params.model, "--detector-cfg and --detector-weights");
@@ -125,10 +124,17 @@ ModelFiles locateModel(const DetectorParams& params) {
     files.names = beside_cfg.string();
   else
     files.names = resolveModelFile(params, params.names, "--detector-names", names_file);
+  files.name = runModelName(params);
+  return files;
+}
+
+std::string runModelName(const DetectorParams& params) {
+  if (params.model == "none") return params.model;
   // A cfg of another model is not the named model (the default name stays
   // yolo-fastest-1.1-xl when only --detector-cfg and --detector-weights are given).
-  if (!known || fs::path(files.cfg).filename() != known->cfg_file) files.name = "custom";
-  return files;
+  const KnownModel* known = knownModel(params.model);
+  if (!known || (!params.cfg.empty() && fs::path(params.cfg).filename() != known->cfg_file)) return "custom";
+  return params.model;
 }
 
 }  // namespace vslam

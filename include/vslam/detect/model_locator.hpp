@@ -43,6 +43,11 @@ std::vector<std::string> modelSearchRoots();
 // Must not be called with params.model == "none".
 ModelFiles locateModel(const DetectorParams& params);
 
+// The name a run with these parameters is reported under, without looking for
+// the files: the model's name, or "custom" when the cfg given is not that
+// model's cfg file; "none" for no detector. locateModel gives the same name.
+std::string runModelName(const DetectorParams& params);
+
 // The cfg alone, by the same rule (for a model whose weights are not at hand).
 std::string locateModelCfg(const DetectorParams& params);
 

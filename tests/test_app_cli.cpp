@@ -159,6 +159,8 @@ TEST(CliRun, DetectorWritesObjectsAndReport) {
   const nlohmann::json report = nlohmann::json::parse(slurp(out / "report.json"));
   EXPECT_EQ(report["detector"]["model"], "yolo-fastest-1.1-xl");
   EXPECT_EQ(report["detector"]["input_size"], 320);
+  EXPECT_EQ(report["detector"]["input_height"], 320);
+  EXPECT_EQ(report["detector"]["placeholder_weights"], false);
   EXPECT_GT(report["detector"]["median_ms"].get<double>(), 0.0);
   EXPECT_GT(report["detector"]["keypoints_added_per_frame"].get<double>(), 0.0);
   for (const char* stage : {"detect", "detect_wait", "filter"}) EXPECT_EQ(report["stage_ms"][stage]["count"], 40) << stage;

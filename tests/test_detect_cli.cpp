@@ -50,6 +50,7 @@ TEST(DetectCommand, WritesJsonAndAnnotatedPngForDogImage) {
   ASSERT_TRUE(json_file) << run.output;
   const nlohmann::json report = nlohmann::json::parse(json_file);
   EXPECT_EQ(report["model"], "yolo-fastest-1.1-xl");
+  EXPECT_EQ(report["placeholder_weights"], false);
   ASSERT_EQ(report["images"].size(), 1u);
   const nlohmann::json& image = report["images"][0];
   EXPECT_EQ(image["file"], dog.string());
@@ -152,7 +153,19 @@ TEST(DetectCommand, PlaceholderWeightsLoadAndRunUnderTheirCfg) {
   const nlohmann::json report = nlohmann::json::parse(json);
   EXPECT_EQ(report["model"], "custom");
   EXPECT_EQ(report["input_size"], 416);
+  EXPECT_EQ(report["placeholder_weights"], true);
   EXPECT_NE(run.output.find("these weights have seen no training image"), std::string::npos) << run.output;
+
+  // A SLAM run with them says so in report.json too, not only in its log.
+  run = runVslam("run --seq tum/fr1_xyz --max-frames 5 --deterministic --no-render --detect-every 1 --detector-cfg " +
+                     cfg.string() + " --detector-weights " + weights.string() + " --out " + (scratch / "run").string(),
+                 scratch);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  std::ifstream run_json(scratch / "run/report.json");
+  const nlohmann::json run_report = nlohmann::json::parse(run_json);
+  EXPECT_EQ(run_report["detector"]["model"], "custom");
+  EXPECT_EQ(run_report["detector"]["placeholder_weights"], true);
+  EXPECT_EQ(run_report["detector"]["input_size"], 416);  // the cfg's
 
   // Never written over an existing file (real weights, say).
   run = runVslam("detect --detector yolov4-tiny --placeholder-weights " + weights.string(), scratch);
@@ -163,6 +176,56 @@ TEST(DetectCommand, PlaceholderWeightsLoadAndRunUnderTheirCfg) {
   run = runVslam("detect --out " + (scratch / "none").string(), scratch);
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_EQ(run.output, "error: vslam detect: --images is required (or --placeholder-weights)\n");
+}
+
+// Without --input-size (or detector.input_size), the network runs at the size
+// its cfg's [net] section gives, as Darknet does: yolov4-tiny at 416, not at
+// the 320 every model once got from the config files. A non-square cfg runs
+// non-square; a size that is not a multiple of 32 is an error naming the cfg.
+TEST(DetectCommand, InputSizeComesFromTheCfgUnlessGiven) {
+  const fs::path scratch = test::scratchDir("detect_cli_cfg_size");
+  const fs::path weights = scratch / "yolov4-tiny.weights";
+  ASSERT_EQ(runVslam("detect --detector yolov4-tiny --placeholder-weights " + weights.string(), scratch).exit_code, 0);
+  const fs::path cfg = test::sharedModels() / "darknet-cfg/yolov4-tiny.cfg";
+  const std::string image = (test::sharedData() / "images/dog.jpg").string();
+  auto detectWith = [&](const fs::path& cfg_path, const std::string& extra, const std::string& out) {
+    return runVslam("detect --images " + image + " --detector-cfg " + cfg_path.string() + " --detector-weights " +
+                        weights.string() + extra + " --out " + (scratch / out).string(),
+                    scratch);
+  };
+  auto reportOf = [&](const std::string& out) {
+    std::ifstream json(scratch / out / "detections.json");
+    return nlohmann::json::parse(json);
+  };
+  RunResult run = detectWith(cfg, "", "cfg");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(reportOf("cfg")["input_size"], 416);
+  EXPECT_EQ(reportOf("cfg")["input_height"], 416);
+  run = detectWith(cfg, " --input-size 320", "given");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(reportOf("given")["input_size"], 320);
+  EXPECT_EQ(reportOf("given")["input_height"], 320);
+
+  // The same network at 416 x 256 (every layer's weights are the same size).
+  std::ifstream original(cfg);
+  std::stringstream text;
+  text << original.rdbuf();
+  std::string wide = text.str();
+  const size_t height = wide.find("height=416");
+  ASSERT_NE(height, std::string::npos);
+  const fs::path wide_cfg = scratch / "wide.cfg";
+  std::ofstream(wide_cfg) << wide.replace(height, 10, "height=256");
+  run = detectWith(wide_cfg, "", "wide");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(reportOf("wide")["input_size"], 416);
+  EXPECT_EQ(reportOf("wide")["input_height"], 256);
+
+  const fs::path odd_cfg = scratch / "odd.cfg";
+  std::ofstream(odd_cfg) << wide.replace(height, 10, "height=250");
+  run = detectWith(odd_cfg, "", "odd");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.output, "error: " + odd_cfg.string() +
+                            ": [net] width 416 and height 250 must be positive multiples of 32 (or give --input-size)\n");
 }
 
 TEST(DetectCommand, BadInputsAreOneLineErrors) {

@@ -133,7 +133,9 @@ int runDetect(const DetectArgs& args) {
   report["model"] = files.name;
   report["cfg"] = files.cfg;
   report["weights"] = files.weights;
-  report["input_size"] = params.input_size;
+  report["input_size"] = detector.inputSize().width;  // the network's input; input_height beside it
+  report["input_height"] = detector.inputSize().height;
+  report["placeholder_weights"] = detector.placeholderWeights();
   report["confidence_threshold"] = params.confidence_threshold;
   report["nms_threshold"] = params.nms_threshold;
   report["dnn_target"] = params.dnn_target;
@@ -206,7 +208,7 @@ int runDetect(const DetectArgs& args) {
     return values[values.size() / 2];
   };
   std::cout << images.size() << " images, " << total_detections << " detections, " << files.name << " at "
-            << params.input_size << " px: median " << std::fixed << std::setprecision(1) << median(times_ms)
+            << detector.inputSize().width << "x" << detector.inputSize().height << " px: median " << std::fixed << std::setprecision(1) << median(times_ms)
             << " ms per image (CPU " << median(cpu_ms) << " ms; first image " << times_ms.front() << " ms); wrote "
             << json_path.string() << " and " << images.size() << " PNGs\n";
   if (args.filter_keypoints)

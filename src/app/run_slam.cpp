@@ -280,6 +280,8 @@ nlohmann::json detectorJson(const DetectionSummary& summary) {
   nlohmann::json json = {{"model", summary.model},
                          {"cfg", summary.cfg},
                          {"input_size", summary.input_size},
+                         {"input_height", summary.input_height},
+                         {"placeholder_weights", summary.placeholder_weights},
                          {"median_ms", summary.median_ms},
                          {"wait_median_ms", summary.wait_median_ms},
                          {"keypoints_added_per_frame", summary.keypoints_added_per_frame},
@@ -544,9 +546,9 @@ void printSummary(const nlohmann::json& report, System& system, const Sequence& 
                   summary.at(stage).p95_ms, summary.at(stage).count);
   const DetectionSummary detection = system.detectionSummary();
   if (detection.enabled) {
-    std::printf("detector: %s at %d, median %.1f ms per frame (Tracking waited %.1f), %.0f keypoints added per "
+    std::printf("detector: %s at %dx%d, median %.1f ms per frame (Tracking waited %.1f), %.0f keypoints added per "
                 "frame; %d objects\n",
-                detection.model.c_str(), detection.input_size, detection.median_ms, detection.wait_median_ms,
+                detection.model.c_str(), detection.input_size, detection.input_height, detection.median_ms, detection.wait_median_ms,
                 detection.keypoints_added_per_frame, report["objects"].get<int>());
     std::printf("detect every %s: network on %d frames, %d frames with fresh boxes, %d with carried ones only "
                 "(median box age %.0f)\n",

@@ -90,20 +90,32 @@ float iou(const cv::Rect2f& a, const cv::Rect2f& b) {
 }
 
 YoloDetector::YoloDetector(const DetectorParams& params, const ModelFiles& files) : params_(params), files_(files) {
-  if (params_.input_size <= 0 || params_.input_size % 32 != 0)
+  if (params_.input_size < 0 || params_.input_size % 32 != 0)
     throw InputError("detector input size " + std::to_string(params_.input_size) +
                      " must be a positive multiple of 32 (e.g. 320, 416, 608)");
   if (params_.confidence_threshold < 0 || params_.confidence_threshold > 1 || params_.nms_threshold < 0 ||
       params_.nms_threshold > 1)
     throw InputError("detector confidence and NMS thresholds must lie in [0, 1]");
 
+  const DarknetNetwork network = parseDarknetCfg(files_.cfg);
+  // No size given: the cfg's, as Darknet itself runs a model.
+  if (params_.input_size > 0) {
+    input_size_ = cv::Size(params_.input_size, params_.input_size);
+  } else {
+    if (network.width <= 0 || network.height <= 0 || network.width % 32 != 0 || network.height % 32 != 0)
+      throw InputError(files_.cfg, 0,
+                       "[net] width " + std::to_string(network.width) + " and height " +
+                           std::to_string(network.height) +
+                           " must be positive multiples of 32 (or give --input-size)");
+    input_size_ = cv::Size(network.width, network.height);
+  }
   // Placeholder weights load and run like trained ones; say so, since their
   // boxes mean nothing.
-  if (checkWeightsFile(files_.cfg, files_.weights).seen == 0)
+  placeholder_weights_ = checkWeightsFile(files_.cfg, files_.weights).seen == 0;
+  if (placeholder_weights_)
     spdlog::warn("{}: these weights have seen no training image (placeholder weights, as `vslam detect "
                  "--placeholder-weights` writes): good for timing only, their detections mean nothing",
                  files_.weights);
-  const DarknetNetwork network = parseDarknetCfg(files_.cfg);
   class_names_ = readClassNames(files_.names);
   if (network.classes > 0 && static_cast<int>(class_names_.size()) != network.classes)
     throw InputError(files_.names, 0,
@@ -126,8 +138,7 @@ std::vector<Detection> YoloDetector::detect(const cv::Mat& bgr) {
   cv::Mat colour = bgr;
   if (bgr.channels() == 1) cv::cvtColor(bgr, colour, cv::COLOR_GRAY2BGR);
   if (bgr.channels() == 4) cv::cvtColor(bgr, colour, cv::COLOR_BGRA2BGR);
-  const cv::Size input(params_.input_size, params_.input_size);
-  const cv::Mat blob = cv::dnn::blobFromImage(colour, 1.0 / 255.0, input, cv::Scalar(), /*swapRB=*/true, /*crop=*/false);
+  const cv::Mat blob = cv::dnn::blobFromImage(colour, 1.0 / 255.0, input_size_, cv::Scalar(), /*swapRB=*/true, /*crop=*/false);
   net_.setInput(blob);
   net_.forward(outputs_, output_names_);
 

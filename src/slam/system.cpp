@@ -321,7 +321,9 @@ DetectionSummary System::detectionSummary() const {
   summary.enabled = true;
   summary.model = detection_->files().name;
   summary.cfg = detection_->files().cfg;
-  summary.input_size = detection_->params().input_size;
+  summary.input_size = detection_->inputSize().width;
+  summary.input_height = detection_->inputSize().height;
+  summary.placeholder_weights = detection_->placeholderWeights();
   summary.frames = static_cast<int>(keypoints_added_.size());
   summary.median_ms = percentile(timer_.samples("detect"), 0.5);
   summary.wait_median_ms = percentile(timer_.samples("detect_wait"), 0.5);

@@ -106,7 +106,7 @@ struct DetectorParams {
   std::string cfg;       // Darknet cfg; empty: resolved from `model`
   std::string weights;   // Darknet weights; empty: resolved from `model`
   std::string names;     // class names, one a line; empty: resolved from `model`
-  int input_size = 320;
+  int input_size = 0;    // network input, square; 0: the cfg's [net] width and height
   double confidence_threshold = 0.4;
   double nms_threshold = 0.45;
   int min_box_px = 64;   // paper's Algorithm 1: skip boxes narrower or lower than this

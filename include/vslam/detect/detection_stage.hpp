@@ -69,6 +69,8 @@ class DetectionStage {
   const DetectorParams& params() const { return params_; }
   const DetectEvery& detectEvery() const { return *params_.detect_every; }
   const ModelFiles& files() const { return detector_->files(); }
+  cv::Size inputSize() const { return detector_->inputSize(); }
+  bool placeholderWeights() const { return detector_->placeholderWeights(); }
   const std::vector<std::string>& classNames() const { return detector_->classNames(); }
   const std::vector<int>& dynamicClassIds() const { return dynamic_class_ids_; }
   const std::vector<int>& movingClassIds() const { return moving_class_ids_; }

@@ -23,9 +23,11 @@ class YoloDetector {
  public:
   // Checks the weights file's size against the cfg, loads the network and
   // the class names, and selects the backend from params.dnn_target
-  // ("cpu", "opencl", "cuda"). Throws InputError for a bad file, an input size
-  // that is not a positive multiple of 32, a names file whose line count
-  // differs from the cfg's classes, or a target this OpenCV build lacks.
+  // ("cpu", "opencl", "cuda"). The network runs at params.input_size square,
+  // or, when that is 0, at the cfg's [net] width and height, as Darknet does.
+  // Throws InputError for a bad file, an input size that is not a multiple of
+  // 32, a names file whose line count differs from the cfg's classes, or a
+  // target this OpenCV build lacks.
   YoloDetector(const DetectorParams& params, const ModelFiles& files);
 
   // Detections at or above params.confidence_threshold after per-class NMS.
@@ -36,6 +38,10 @@ class YoloDetector {
   double lastMs() const { return last_ms_; }  // wall time of the last detect()
   const ModelFiles& files() const { return files_; }
   const DetectorParams& params() const { return params_; }
+  cv::Size inputSize() const { return input_size_; }  // the network's input, width by height
+  // The weights' header says they have seen no training image: placeholder
+  // weights (vslam detect --placeholder-weights), whose boxes mean nothing.
+  bool placeholderWeights() const { return placeholder_weights_; }
 
   // Raw network outputs of the last detect() (one matrix per YOLO head), for tests.
   const std::vector<cv::Mat>& lastOutputs() const { return outputs_; }
@@ -43,6 +49,8 @@ class YoloDetector {
  private:
   DetectorParams params_;
   ModelFiles files_;
+  cv::Size input_size_;
+  bool placeholder_weights_ = false;
   cv::dnn::Net net_;
   std::vector<std::string> output_names_;
   std::vector<std::string> class_names_;

@@ -103,7 +103,9 @@ struct DetectionSummary {
   bool enabled = false;      // false: --detector none (plain ORB-SLAM)
   std::string model;         // model name ("custom" for explicit cfg/weights)
   std::string cfg;           // cfg file used
-  int input_size = 0;
+  int input_size = 0;       // network input width (square networks: the size)
+  int input_height = 0;
+  bool placeholder_weights = false;  // weights that have seen no training image: timing only
   int frames = 0;            // frames the keypoint filter ran on
   double median_ms = 0.0;    // network time per frame (detection thread)
   double wait_median_ms = 0.0;            // Tracking's time blocked on detection per frame

@@ -207,8 +207,10 @@ int runDetect(const DetectArgs& args) {
     std::sort(values.begin(), values.end());
     return values[values.size() / 2];
   };
+  const cv::Size input = detector.inputSize();
   std::cout << images.size() << " images, " << total_detections << " detections, " << files.name << " at "
-            << detector.inputSize().width << "x" << detector.inputSize().height << " px: median " << std::fixed << std::setprecision(1) << median(times_ms)
+            << input.width << "x" << input.height << " px: median " << std::fixed << std::setprecision(1)
+            << median(times_ms)
             << " ms per image (CPU " << median(cpu_ms) << " ms; first image " << times_ms.front() << " ms); wrote "
             << json_path.string() << " and " << images.size() << " PNGs\n";
   if (args.filter_keypoints)

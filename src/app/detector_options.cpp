@@ -11,7 +11,9 @@ void addDetectorOptions(CLI::App& command, DetectorOptions& options) {
   command.add_option("--detector-cfg", options.cfg, "Darknet cfg file (overrides the model's)");
   command.add_option("--detector-weights", options.weights, "Darknet weights file (overrides the model's)");
   command.add_option("--detector-names", options.names, "Class names file, one a line (overrides the model's)");
-  command.add_option("--input-size", options.input_size, "Network input size in pixels, square, a multiple of 32 (320, 416, 608) (default: the config's detector.input_size; 0 there, as shipped: the model cfg's [net] width and height)");
+  command.add_option("--input-size", options.input_size,
+                     "Network input size in pixels, square, a multiple of 32 (320, 416, 608) (default: the config's "
+                     "detector.input_size; 0 there, as shipped: the model cfg's [net] width and height)");
   command.add_option("--conf", options.confidence, "Confidence threshold in [0, 1]");
   command.add_option("--nms", options.nms, "Non-maximum suppression IoU threshold in [0, 1]");
   command.add_option("--min-box-px", options.min_box_px, "Skip boxes narrower or lower than this (paper: 64)");

@@ -548,8 +548,8 @@ void printSummary(const nlohmann::json& report, System& system, const Sequence& 
   if (detection.enabled) {
     std::printf("detector: %s at %dx%d, median %.1f ms per frame (Tracking waited %.1f), %.0f keypoints added per "
                 "frame; %d objects\n",
-                detection.model.c_str(), detection.input_size, detection.input_height, detection.median_ms, detection.wait_median_ms,
-                detection.keypoints_added_per_frame, report["objects"].get<int>());
+                detection.model.c_str(), detection.input_size, detection.input_height, detection.median_ms,
+                detection.wait_median_ms, detection.keypoints_added_per_frame, report["objects"].get<int>());
     std::printf("detect every %s: network on %d frames, %d frames with fresh boxes, %d with carried ones only "
                 "(median box age %.0f)\n",
                 detection.detect_every.c_str(), detection.network_frames, detection.fresh_frames,

@@ -138,7 +138,8 @@ std::vector<Detection> YoloDetector::detect(const cv::Mat& bgr) {
   cv::Mat colour = bgr;
   if (bgr.channels() == 1) cv::cvtColor(bgr, colour, cv::COLOR_GRAY2BGR);
   if (bgr.channels() == 4) cv::cvtColor(bgr, colour, cv::COLOR_BGRA2BGR);
-  const cv::Mat blob = cv::dnn::blobFromImage(colour, 1.0 / 255.0, input_size_, cv::Scalar(), /*swapRB=*/true, /*crop=*/false);
+  const cv::Mat blob =
+      cv::dnn::blobFromImage(colour, 1.0 / 255.0, input_size_, cv::Scalar(), /*swapRB=*/true, /*crop=*/false);
   net_.setInput(blob);
   net_.forward(outputs_, output_names_);
 

@@ -230,13 +230,13 @@ DarknetWeightsHeader readDarknetWeightsHeader(std::istream& in, const std::strin
   header.major = version[0];
   header.minor = version[1];
   header.revision = version[2];
-  if (header.bytes() == 20) {
-    std::int64_t seen = 0;
+  auto readSeen = [&](auto seen) {  // int64 or int32, by the version
     if (in.read(reinterpret_cast<char*>(&seen), sizeof(seen))) header.seen = seen;
-  } else {
-    std::int32_t seen = 0;
-    if (in.read(reinterpret_cast<char*>(&seen), sizeof(seen))) header.seen = seen;
-  }
+  };
+  if (header.bytes() == 20)
+    readSeen(std::int64_t{0});
+  else
+    readSeen(std::int32_t{0});
   return header;
 }
 
@@ -245,7 +245,10 @@ std::int64_t expectedWeightsBytes(const DarknetNetwork& network, const DarknetWe
 }
 
 DarknetWeightsHeader checkWeightsFile(const std::string& cfg_path, const std::string& weights_path) {
-  const DarknetNetwork network = parseDarknetCfg(cfg_path);
+  return checkWeightsFile(parseDarknetCfg(cfg_path), weights_path);
+}
+
+DarknetWeightsHeader checkWeightsFile(const DarknetNetwork& network, const std::string& weights_path) {
   const DarknetWeightsHeader header = readDarknetWeightsHeader(weights_path);
   std::error_code error;
   const auto actual = static_cast<std::int64_t>(std::filesystem::file_size(weights_path, error));

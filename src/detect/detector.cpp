@@ -111,7 +111,7 @@ YoloDetector::YoloDetector(const DetectorParams& params, const ModelFiles& files
   }
   // Placeholder weights load and run like trained ones; say so, since their
   // boxes mean nothing.
-  placeholder_weights_ = checkWeightsFile(files_.cfg, files_.weights).seen == 0;
+  placeholder_weights_ = checkWeightsFile(network, files_.weights).seen == 0;
   if (placeholder_weights_)
     spdlog::warn("{}: these weights have seen no training image (placeholder weights, as `vslam detect "
                  "--placeholder-weights` writes): good for timing only, their detections mean nothing",

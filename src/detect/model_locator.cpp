@@ -113,7 +113,7 @@ ModelFiles locateModel(const DetectorParams& params) {
   const KnownModel* known = knownModel(params.model);
   const bool fully_explicit = !params.cfg.empty() && !params.weights.empty();
   if (!known && !fully_explicit) throw unknownModel(params.model, "--detector-cfg and --detector-weights");
-  files.cfg = resolveModelFile(params, params.cfg, "--detector-cfg", known ? known->cfg_file : "");
+  files.cfg = locateModelCfg(params);
   files.weights = resolveModelFile(params, params.weights, "--detector-weights", known ? known->weights_file : "");
   // Class names: the file beside the cfg first (it belongs to that model),
   // then the search. A custom model without one gets COCO's: every model here is COCO-trained.

@@ -62,6 +62,8 @@ std::int64_t expectedWeightsBytes(const DarknetNetwork& network, const DarknetWe
 // implies when they differ (or when the file is missing). Returns the header
 // it read, so that a caller need not read it again.
 DarknetWeightsHeader checkWeightsFile(const std::string& cfg_path, const std::string& weights_path);
+// The same against a cfg already parsed (a caller that needs the network anyway).
+DarknetWeightsHeader checkWeightsFile(const DarknetNetwork& network, const std::string& weights_path);
 // The comparison itself, for a weights file of `actual_bytes` bytes.
 void checkWeightsSize(const DarknetNetwork& network, const DarknetWeightsHeader& header, std::int64_t actual_bytes,
                       const std::string& weights_path);

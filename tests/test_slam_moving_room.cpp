@@ -92,6 +92,9 @@ TEST(SlamMovingObject, RoomWithAWalkingPersonStaysNearTheStaticRoomOnlyWithMotio
   EXPECT_GT(checked.stats.moving_boxes_moving, 0);             // the person is seen moving
   // Measured (threaded, 3 runs each, 2 Dec 2026): static 0.89-0.90 cm, checked
   // 1.03 cm (1.15x), paper's filter alone 1.65 cm (1.85x).
+  // Fragile: both conditions hold on 3 of 8 texture seeds, and a tighter pose
+  // solver tolerance makes seed 1 fail too (tools/bench_moving_room.sh;
+  // docs/BENCHMARKS.md, "The moving-room test across texture seeds").
   EXPECT_LE(checked.keyframes.rmse_m, 1.2 * static_room.keyframes.rmse_m);
   EXPECT_GT(unchecked.keyframes.rmse_m, 1.2 * static_room.keyframes.rmse_m);
 }

@@ -39,20 +39,29 @@ if photo is None:
 cv2.imwrite(sys.argv[2], photo[80:390, 165:305])
 PY
 printf '%-5s %-10s %-10s %-12s %-12s %s\n' seed static_cm checked_cm unchecked_cm "moving/parked/undecided" "conditions"
+extra=("$@")  # the caller's vslam run options, for every run
+# Renders the room of seed $seed into $1 (`vslam synth` options after it); false when it fails.
+render() {
+  local room="$1"
+  shift
+  build/vslam synth --out "$room" --seed "$seed" --frames 260 --turns 0.624 "$@" >"$room.synth.log" 2>&1 ||
+    { echo "seed $seed: vslam synth failed, see $room.synth.log" >&2; return 1; }
+}
+# Runs room $2 monocular into run-$1-$seed (`vslam run` options after them); its failure shows as a missing ATE.
+run() {
+  local kind="$1" room="$2"
+  shift 2
+  build/vslam run --seq "$room" --config "$room/camera.yaml" --mode mono --no-render "$@" \
+    --out "$out/run-$kind-$seed" "${extra[@]}" >/dev/null 2>"$out/run-$kind-$seed.log" || true
+}
 for seed in $seeds; do
   static="$out/static-$seed"
   moving="$out/moving-$seed"
-  build/vslam synth --out "$static" --seed "$seed" --frames 260 --turns 0.624 >"$static.synth.log" 2>&1 ||
-    { echo "seed $seed: vslam synth failed, see $static.synth.log" >&2; continue; }
-  build/vslam synth --out "$moving" --seed "$seed" --frames 260 --turns 0.624 --moving-object "$out/person.png" \
-    --moving-object-width 0.35 >"$moving.synth.log" 2>&1 ||
-    { echo "seed $seed: vslam synth failed, see $moving.synth.log" >&2; continue; }
-  build/vslam run --seq "$static" --config "$static/camera.yaml" --mode mono --moving-classes coco-movable \
-    --no-render --out "$out/run-static-$seed" "$@" >/dev/null 2>"$out/run-static-$seed.log" || true
-  build/vslam run --seq "$moving" --config "$moving/camera.yaml" --mode mono --moving-classes coco-movable \
-    --no-render --out "$out/run-checked-$seed" "$@" >/dev/null 2>"$out/run-checked-$seed.log" || true
-  build/vslam run --seq "$moving" --config "$moving/camera.yaml" --mode mono \
-    --no-render --out "$out/run-unchecked-$seed" "$@" >/dev/null 2>"$out/run-unchecked-$seed.log" || true
+  render "$static" || continue
+  render "$moving" --moving-object "$out/person.png" --moving-object-width 0.35 || continue
+  run static "$static" --moving-classes coco-movable
+  run checked "$moving" --moving-classes coco-movable
+  run unchecked "$moving"
   python3 - "$out" "$seed" <<'PY'
 import json, sys
 out, seed = sys.argv[1], sys.argv[2]

@@ -201,7 +201,11 @@ TEST(SlamKidnapped, Fr1XyzRelocalisesEveryJumpDeterministic) {
 // 1.9-3.3 cm off over six runs on 2 Dec and were held to 3 cm in deterministic
 // mode only. On 3 Dec (every frame posed again) 16 threaded runs, 6 of them
 // beside a second test, put them at most 2.47 cm off, so the bound now holds
-// for every jump (docs/BENCHMARKS.md, issue 16).
+// for every jump (docs/BENCHMARKS.md, issue 16). That was too few runs: on
+// 4 Dec jump 4 went over 3 cm in 2 of 65 runs (3.46 and 3.91 cm) and in one CI
+// run (3.43 cm), where the live map's keyframe near frame 430 is 2-3 cm off.
+// The bound is the issue's and stays; this test fails about 3 % of runs until
+// the live map is better there (docs/BENCHMARKS.md, "Stop 38").
 TEST(SlamKidnapped, Fr1XyzRelocalisesEveryJumpThreaded) {
   expectEveryJumpRelocalised(runKidnapped(fr1Xyz(), kFr1XyzPieces, SensorMode::Monocular, false), {1, 2, 3, 4, 5});
 }

@@ -34,7 +34,8 @@ RoomLoopParams shortRoom() {
 // photo): a billboard of the whole photo would show a landscape that no box
 // marks as movable. The crop is still wider than the detector's person box
 // (x 188-272, y 103-363 on the photo): in the room, about 40 % of the
-// billboard's pixels (grass, the dog's head) fall outside the boxes and are
+// billboard's pixels (grass, the dog's head) fall outside the boxes
+// (tools/billboard_coverage.py: 41 % on texture seeds 1 and 6) and are
 // keypoints of the static scene to the check, moving with the person
 // (docs/BENCHMARKS.md, "What the billboard is").
 std::string croppedPerson() {

@@ -22,6 +22,8 @@ namespace {
 
 constexpr size_t kTriangulationNeighbours = 20;       // monocular, as ORB-SLAM
 constexpr size_t kTriangulationNeighboursDepth = 10;  // RGB-D, as ORB-SLAM2
+// ORB-SLAM2 fuses with 10 in RGB-D; that was no faster here and no more
+// accurate (docs/BENCHMARKS.md), so both modes use 20.
 constexpr size_t kFuseNeighbours = 20;
 constexpr size_t kFuseSecondNeighbours = 5;
 constexpr double kMinParallaxCos = 0.9998;

@@ -10,6 +10,7 @@
 #include <queue>
 #include <tuple>
 
+#include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -216,11 +217,16 @@ void computeDescriptor(const cv::Mat& blurred, const cv::Point& p, float angle_d
   const float angle = angle_deg * static_cast<float>(CV_PI / 180.0);
   const float c = static_cast<float>(std::cos(static_cast<double>(angle)));
   const float s = static_cast<float>(std::sin(static_cast<double>(angle)));
-  int offsets[2 * 256];
-  for (int i = 0; i < 2 * 256; ++i) {
-    const float x = points_x[i] * c - points_y[i] * s;
-    const float y = points_x[i] * s + points_y[i] * c;
-    offsets[i] = cvRound(y) * step + cvRound(x);
+  // The 512 rotated pattern points, four at a time: the same products, sums
+  // and round-half-to-even as cvRound, so the same bits as OpenCV's ORB.
+  alignas(16) int offsets[2 * 256];
+  const cv::v_float32x4 cos4 = cv::v_setall_f32(c), sin4 = cv::v_setall_f32(s);
+  const cv::v_int32x4 step4 = cv::v_setall_s32(step);
+  for (int i = 0; i < 2 * 256; i += 4) {
+    const cv::v_float32x4 px = cv::v_load(points_x + i), py = cv::v_load(points_y + i);
+    const cv::v_int32x4 x = cv::v_round(px * cos4 - py * sin4);
+    const cv::v_int32x4 y = cv::v_round(px * sin4 + py * cos4);
+    cv::v_store_aligned(offsets + i, y * step4 + x);
   }
   for (int byte = 0; byte < kOrbDescriptorBytes; ++byte) {
     const int* o = offsets + 16 * byte;

@@ -10,7 +10,11 @@ benchmark's definition of evaluate_ate (Sturm et al. 2012):
  4. error of pair i = |gt_i - (s R est_i + t)|; report RMSE, mean, median, std
     (population), min, max, the scale and the number of pairs.
 
-    /usr/bin/python3 tools/evaluate_ate_reference.py GT EST [--scale] [--max-difference 0.02]
+    /usr/bin/python3 tools/evaluate_ate_reference.py GT EST [--scale] [--max-difference 0.02] [--segment N]
+
+With --segment N it also gives the RMSE of each run of N consecutive pairs
+(in time order) under the one alignment of the whole trajectory, to show
+where along a run the error lies.
 
 Needs numpy (Debian: apt-get install python3-numpy). Prints JSON.
 """
@@ -74,6 +78,8 @@ def main():
     parser.add_argument("estimate")
     parser.add_argument("--scale", action="store_true", help="also estimate a scale (Sim(3))")
     parser.add_argument("--max-difference", type=float, default=0.02)
+    parser.add_argument("--segment", type=int, default=0,
+                        help="also the RMSE of every N consecutive pairs, under the whole run's alignment")
     args = parser.parse_args()
 
     gt_stamps, gt_xyz = read_trajectory(args.groundtruth)
@@ -83,7 +89,7 @@ def main():
     est = np.array([est_xyz[e] for _, e in matches]).T
     scale, rotation, translation = horn_alignment(est, gt, args.scale)
     errors = np.sqrt(np.sum((scale * rotation @ est + translation - gt) ** 2, axis=0))
-    print(json.dumps({
+    figures = {
         "rmse_m": float(np.sqrt(np.mean(errors ** 2))),
         "mean_m": float(np.mean(errors)),
         "median_m": float(np.median(errors)),
@@ -92,7 +98,14 @@ def main():
         "max_m": float(np.max(errors)),
         "scale": scale,
         "pairs": len(matches),
-    }, indent=2))
+    }
+    if args.segment > 0:
+        figures["segments"] = [{
+            "first_gt_stamp": float(gt_stamps[matches[k][0]]),
+            "pairs": len(errors[k:k + args.segment]),
+            "rmse_m": float(np.sqrt(np.mean(errors[k:k + args.segment] ** 2))),
+        } for k in range(0, len(errors), args.segment)]
+    print(json.dumps(figures, indent=2))
 
 
 if __name__ == "__main__":

@@ -167,19 +167,40 @@ Eigen::Matrix<double, kResiduals, 1> measurementVector(const Vec2& pixel, double
   return m;
 }
 
-// Writes d p_c / d pose-tangent = [-[p_c]x  I] through d_residual_d_pc into a
-// row-major kResiduals x 7 ambient Jacobian (see PoseManifold).
+// d r / d pose-tangent = d r / d p_c * [-[p_c]x  I] (see PoseManifold).
 template <int kResiduals>
-void writePoseJacobian(const Eigen::Matrix<double, kResiduals, 3>& d_residual_d_pc, const Vec3& p_c,
-                       double* jacobian) {
-  Eigen::Map<Eigen::Matrix<double, kResiduals, kPoseParameterSize, Eigen::RowMajor>> J(jacobian);
+Eigen::Matrix<double, kResiduals, 6> poseTangentJacobian(const Eigen::Matrix<double, kResiduals, 3>& d_residual_d_pc,
+                                                         const Vec3& p_c) {
+  Eigen::Matrix<double, kResiduals, 6> J;
   // d r / d omega = d r / d p_c * (-[p_c]x) = d r / d p_c * [p_c]x^T, i.e. the cross products below.
   for (int row = 0; row < kResiduals; ++row) {
     const Vec3 g = d_residual_d_pc.row(row).transpose();
     J.template block<1, 3>(row, 0) = p_c.cross(g).transpose();
     J.template block<1, 3>(row, 3) = g.transpose();
-    J(row, 6) = 0;
   }
+  return J;
+}
+
+// The same into a row-major kResiduals x 7 ambient Jacobian, whose 7th column
+// is zero (see PoseManifold).
+template <int kResiduals>
+void writePoseJacobian(const Eigen::Matrix<double, kResiduals, 3>& d_residual_d_pc, const Vec3& p_c,
+                       double* jacobian) {
+  Eigen::Map<Eigen::Matrix<double, kResiduals, kPoseParameterSize, Eigen::RowMajor>> J(jacobian);
+  J.template leftCols<6>() = poseTangentJacobian<kResiduals>(d_residual_d_pc, p_c);
+  J.col(6).setZero();
+}
+
+// Residual of a known point at camera-frame position p_c and its Jacobian with
+// respect to the 6-d pose tangent: the term of pose-only optimisation, which is
+// solved without Ceres (pose_optimizer.cpp).
+template <int kResiduals>
+void poseOnlyResidual(const ProjectionModel& model, double sqrt_information,
+                      const Eigen::Matrix<double, kResiduals, 1>& measured, const Vec3& p_c,
+                      Eigen::Matrix<double, kResiduals, 1>& residual, Eigen::Matrix<double, kResiduals, 6>& jacobian) {
+  Eigen::Matrix<double, kResiduals, 3> d_r_d_pc;
+  reprojectionResidual<kResiduals>(model, sqrt_information, measured, p_c, residual.data(), &d_r_d_pc);
+  jacobian = poseTangentJacobian<kResiduals>(d_r_d_pc, p_c);
 }
 
 // Observation of a free point by a free pose: parameter blocks (pose 7, point 3).
@@ -223,47 +244,6 @@ class ReprojectionCost : public ceres::SizedCostFunction<kResiduals, kPoseParame
   Eigen::Matrix<double, kResiduals, 1> measured_;
   double sqrt_information_;
   const SE3* row_motion_;
-};
-
-// Observation of a known point by a free pose (pose-only optimisation). It can
-// be switched off between solves, which keeps one ceres::Problem for all rounds.
-template <int kResiduals>
-class PoseOnlyReprojectionCost : public ceres::SizedCostFunction<kResiduals, kPoseParameterSize> {
- public:
-  PoseOnlyReprojectionCost(const ProjectionModel& model, const Vec3& point_w, const Vec2& pixel, double u_right,
-                           double inv_sigma2)
-      : model_(model), point_w_(point_w), measured_(measurementVector<kResiduals>(pixel, u_right)),
-        sqrt_information_(std::sqrt(inv_sigma2)) {}
-
-  void setActive(bool active) { active_ = active; }
-
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    if (!active_) {
-      Eigen::Map<Eigen::Matrix<double, kResiduals, 1>>(residuals).setZero();
-      if (jacobians && jacobians[0]) {
-        Eigen::Map<Eigen::Matrix<double, kResiduals, kPoseParameterSize, Eigen::RowMajor>>(jacobians[0]).setZero();
-      }
-      return true;
-    }
-    const Eigen::Map<const Quat> q(parameters[0]);
-    const Eigen::Map<const Vec3> t(parameters[0] + 4);
-    const Vec3 p_c = q * point_w_ + t;
-    if (!jacobians || !jacobians[0]) {
-      reprojectionResidual<kResiduals>(model_, sqrt_information_, measured_, p_c, residuals, nullptr);
-      return true;
-    }
-    Eigen::Matrix<double, kResiduals, 3> d_r_d_pc;
-    reprojectionResidual<kResiduals>(model_, sqrt_information_, measured_, p_c, residuals, &d_r_d_pc);
-    writePoseJacobian<kResiduals>(d_r_d_pc, p_c, jacobians[0]);
-    return true;
-  }
-
- private:
-  ProjectionModel model_;
-  Vec3 point_w_;
-  Eigen::Matrix<double, kResiduals, 1> measured_;
-  double sqrt_information_;
-  bool active_ = true;
 };
 
 }  // namespace vslam

@@ -154,6 +154,16 @@ TEST(Ate, TooFewPairsIsAnError) {
   }
 }
 
+// A run that tracked nothing: the reason is the empty estimate, not pairing.
+TEST(Ate, EmptyEstimateSaysItHoldsNoPoses) {
+  try {
+    computeAte({}, helix(10), AteOptions());
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "the estimate holds no poses; at least 3 are needed to align");
+  }
+}
+
 TEST(Ate, MotionlessEstimateIsAnErrorNotNaN) {
   const std::vector<StampedPose> groundtruth = helix(10);
   std::vector<StampedPose> estimate = helix(10);

@@ -33,6 +33,7 @@ std::vector<std::pair<int, int>> associatePoses(const std::vector<StampedPose>& 
 AteResult computeAte(const std::vector<StampedPose>& estimate, const std::vector<StampedPose>& groundtruth,
                      const AteOptions& options) {
   AteResult result;
+  if (estimate.empty()) throw InputError("the estimate holds no poses; at least 3 are needed to align");
   result.pairs_idx = associatePoses(estimate, groundtruth, options.association, options.max_time_diff);
   result.pairs = static_cast<int>(result.pairs_idx.size());
   if (result.pairs < 3)

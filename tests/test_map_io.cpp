@@ -9,14 +9,12 @@
 #include <map>
 #include <memory>
 #include <random>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
-#include <spdlog/sinks/ostream_sink.h>
-#include <spdlog/spdlog.h>
 
+#include "log_capture.hpp"
 #include "map_test_support.hpp"
 
 #include "vslam/core/error.hpp"
@@ -546,30 +544,13 @@ TEST_F(MapIoTest, RefusesIntegersOutsideTheirColumnsRange) {
   }
 }
 
-// What spdlog's default logger writes while one lives (the loader's warnings).
-class CapturedLog {
- public:
-  CapturedLog() : previous_(spdlog::default_logger()) {
-    spdlog::set_default_logger(
-        std::make_shared<spdlog::logger>("captured", std::make_shared<spdlog::sinks::ostream_sink_st>(text_)));
-  }
-  ~CapturedLog() { spdlog::set_default_logger(previous_); }
-  CapturedLog(const CapturedLog&) = delete;
-  CapturedLog& operator=(const CapturedLog&) = delete;
-  std::string text() const { return text_.str(); }
-
- private:
-  std::ostringstream text_;
-  std::shared_ptr<spdlog::logger> previous_;
-};
-
 // Loads `path` with the fixture's camera and returns its objects, and what the
 // loader logged meanwhile in `log`.
 std::vector<ObjectLandmark> loadObjectsLogging(const std::string& path, const PinholeCamera& camera,
                                                const ScalePyramid& pyramid, std::string& log) {
   Map loaded;
   std::vector<ObjectLandmark> objects;
-  const CapturedLog captured;
+  const test::CapturedLog captured;
   loadMapDatabase(path, loaded, camera, pyramid, &objects);
   log = captured.text();
   return objects;

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "log_capture.hpp"
 #include "test_support.hpp"
 #include "vslam/io/ply.hpp"
 #include "vslam/render/map_render.hpp"
@@ -138,6 +139,30 @@ TEST(RenderCommand, UnreadableGroundTruthOnlyCostsTheComparison) {
   const PlotProjection top = fitTopView(run.estimate, image.size());
   const cv::Point2d middle = top.toPixel(0.5 * (run.estimate[20] + run.estimate[21]));
   EXPECT_LE(colourDistance(pixelAt(image, middle), kEstimateColour), 6);
+}
+
+// A run that never started a map writes its files with headers only: the
+// render says they hold nothing, not that they are missing.
+TEST(RenderCommand, RunWithoutPosesSaysItsFilesAreEmptyNotMissing) {
+  const fs::path dir = test::scratchDir("render_command_empty") / "run";
+  fs::create_directories(dir);
+  std::ofstream(dir / "trajectory.txt") << "# timestamp tx ty tz qx qy qz qw\n";
+  std::ofstream(dir / "keyframes.txt") << "# timestamp tx ty tz qx qy qz qw\n";
+  writeMapPly((dir / "map.ply").string(), {});
+  std::ofstream(dir / "objects.json") << "[]\n";
+  std::ofstream(dir / "report.json") << R"({"sequence": "s", "mode": "mono", "groundtruth_file": null})";
+  std::string log;
+  {
+    const test::CapturedLog captured;
+    EXPECT_TRUE(renderRunFolder(dir.string(), dir.string()).empty());
+    log = captured.text();
+  }
+  EXPECT_EQ(log.find("no trajectory.txt"), std::string::npos) << log;
+  EXPECT_NE(log.find("trajectory.txt in " + dir.string() + " holds no poses"), std::string::npos) << log;
+  EXPECT_EQ(log.find("no map.ply"), std::string::npos) << log;
+  EXPECT_NE(log.find("map.ply, keyframes.txt, objects.json in " + dir.string() + ": no points, keyframes or objects"),
+            std::string::npos)
+      << log;
 }
 
 TEST(RenderCommand, MissingRunFolderFailsWithItsName) {

@@ -5,9 +5,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <limits>
 #include <optional>
 #include <sstream>
+#include <string>
 
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
@@ -181,6 +183,14 @@ std::vector<MapRenderObject> readObjects(const std::string& path) {
   return objects;
 }
 
+// The names among `names` that exist in `dir`, joined by ", ".
+std::string presentFiles(const fs::path& dir, std::initializer_list<const char*> names) {
+  std::string present;
+  for (const char* name : names)
+    if (fs::exists(dir / name)) present += (present.empty() ? "" : ", ") + std::string(name);
+  return present;
+}
+
 }  // namespace
 
 std::vector<std::string> renderRunFolder(const std::string& run_dir_text, const std::string& out_dir) {
@@ -218,6 +228,9 @@ std::vector<std::string> renderRunFolder(const std::string& run_dir_text, const 
     writeTrajectoryPlots(input, out_dir);
     note("trajectory_top.png");
     note("trajectory_3d.png");
+  } else if (fs::exists(run_dir / "trajectory.txt")) {
+    spdlog::info("render: trajectory.txt in {} holds no poses (no frame was tracked); no trajectory plots",
+                 run_dir_text);
   } else {
     spdlog::info("render: no trajectory.txt in {}; no trajectory plots", run_dir_text);
   }
@@ -240,6 +253,9 @@ std::vector<std::string> renderRunFolder(const std::string& run_dir_text, const 
     note("map_colour.png");
     note("map_classes.png");
     note("map_top.png");
+  } else if (const std::string present = presentFiles(run_dir, {"map.ply", "keyframes.txt", "objects.json"});
+             !present.empty()) {
+    spdlog::info("render: {} in {}: no points, keyframes or objects; no map renders", present, run_dir_text);
   } else {
     spdlog::info("render: no map.ply, keyframes.txt or objects.json in {}; no map renders", run_dir_text);
   }

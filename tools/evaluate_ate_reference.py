@@ -11,10 +11,20 @@ benchmark's definition of evaluate_ate (Sturm et al. 2012):
     (population), min, max, the scale and the number of pairs.
 
     /usr/bin/python3 tools/evaluate_ate_reference.py GT EST [--scale] [--max-difference 0.02] [--segment N]
+        [--steps-from-groundtruth W [--rescale-pairs A:B]]
 
 With --segment N it also gives the RMSE of each run of N consecutive pairs
 (in time order) under the one alignment of the whole trajectory, to show
 where along a run the error lies.
+
+With --steps-from-groundtruth W it also gives the ATE that is left when the
+estimate's scale drift is taken out (a diagnostic, not a benchmark figure):
+each step between consecutive pairs is rescaled by the ground truth's path
+length over the estimate's, both summed over the steps within W // 2 of it
+(W + 1 steps for an even W), the path is summed again from the first pair,
+and aligned with a scale. With
+--rescale-pairs A:B only the steps from pair A to pair B are rescaled so; the
+others are rescaled by the whole run's ratio.
 
 Needs numpy (Debian: apt-get install python3-numpy). Prints JSON.
 """
@@ -72,6 +82,22 @@ def horn_alignment(est, gt, with_scale):
     return scale, rotation, translation
 
 
+def steps_from_groundtruth(est, gt, window, first, last):
+    """est, gt: 3xN. The estimate with its steps' lengths taken from the ground
+    truth (see the module's docstring); steps outside [first, last) keep the
+    whole run's ratio."""
+    est_steps, gt_steps = np.diff(est, axis=1), np.diff(gt, axis=1)
+    est_lengths = np.linalg.norm(est_steps, axis=0)
+    gt_lengths = np.linalg.norm(gt_steps, axis=0)
+    ratios = np.full(est_steps.shape[1], gt_lengths.sum() / est_lengths.sum())
+    half = window // 2
+    for i in range(max(0, first), min(last, est_steps.shape[1])):
+        lo, hi = max(0, i - half), i + half + 1
+        ratios[i] = gt_lengths[lo:hi].sum() / est_lengths[lo:hi].sum()
+    path = np.cumsum(est_steps * ratios, axis=1)
+    return np.hstack([est[:, :1], est[:, :1] + path])
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("groundtruth")
@@ -80,6 +106,10 @@ def main():
     parser.add_argument("--max-difference", type=float, default=0.02)
     parser.add_argument("--segment", type=int, default=0,
                         help="also the RMSE of every N consecutive pairs, under the whole run's alignment")
+    parser.add_argument("--steps-from-groundtruth", type=int, default=0, metavar="W",
+                        help="also the ATE with each step's length from the ground truth (steps within W // 2)")
+    parser.add_argument("--rescale-pairs", default="", metavar="A:B",
+                        help="with --steps-from-groundtruth: only the steps from pair A to pair B")
     args = parser.parse_args()
 
     gt_stamps, gt_xyz = read_trajectory(args.groundtruth)
@@ -105,6 +135,18 @@ def main():
             "pairs": len(errors[k:k + args.segment]),
             "rmse_m": float(np.sqrt(np.mean(errors[k:k + args.segment] ** 2))),
         } for k in range(0, len(errors), args.segment)]
+    if args.steps_from_groundtruth > 0:
+        first, last = 0, est.shape[1]
+        if args.rescale_pairs:
+            first, last = (int(v) for v in args.rescale_pairs.split(":"))
+        rescaled = steps_from_groundtruth(est, gt, args.steps_from_groundtruth, first, last)
+        r_scale, r_rotation, r_translation = horn_alignment(rescaled, gt, True)
+        r_errors = np.sqrt(np.sum((r_scale * r_rotation @ rescaled + r_translation - gt) ** 2, axis=0))
+        figures["steps_from_groundtruth"] = {
+            "window": args.steps_from_groundtruth,
+            "steps_rescaled": [first, min(last, est.shape[1] - 1)],
+            "rmse_m": float(np.sqrt(np.mean(r_errors ** 2))),
+        }
     print(json.dumps(figures, indent=2))
 
 

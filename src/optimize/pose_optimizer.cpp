@@ -47,18 +47,7 @@ class PoseProblem {
       if (!active[i]) continue;
       const Observation2D& obs = observations_[i];
       const Vec3 p_c = T_cw * points_w_[obs.point];
-      double s;
-      if (hasRightCoordinate(obs.u_right)) {
-        Eigen::Vector3d r;
-        reprojectionResidual<3>(model_, std::sqrt(obs.inv_sigma2), measurementVector<3>(obs.pixel, obs.u_right), p_c,
-                                r.data(), nullptr);
-        s = r.squaredNorm();
-      } else {
-        Eigen::Vector2d r;
-        reprojectionResidual<2>(model_, std::sqrt(obs.inv_sigma2), measurementVector<2>(obs.pixel, obs.u_right), p_c,
-                                r.data(), nullptr);
-        s = r.squaredNorm();
-      }
+      const double s = hasRightCoordinate(obs.u_right) ? squaredError<3>(obs, p_c) : squaredError<2>(obs, p_c);
       total += robust ? huberRho(s, chi2Bound(obs, options_)) : s;
     }
     return 0.5 * total;
@@ -82,6 +71,15 @@ class PoseProblem {
   }
 
  private:
+  // The whitened squared reprojection error of one observation.
+  template <int kResiduals>
+  double squaredError(const Observation2D& obs, const Vec3& p_c) const {
+    Eigen::Matrix<double, kResiduals, 1> r;
+    reprojectionResidual<kResiduals>(model_, std::sqrt(obs.inv_sigma2),
+                                     measurementVector<kResiduals>(obs.pixel, obs.u_right), p_c, r.data(), nullptr);
+    return r.squaredNorm();
+  }
+
   template <int kResiduals>
   void accumulate(size_t i, const Vec3& p_c, bool robust, Mat6& H, Vec6& g) const {
     const Observation2D& obs = observations_[i];

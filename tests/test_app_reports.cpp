@@ -230,5 +230,58 @@ TEST(BatchEval, HelpDocumentsEveryOptionAndBadUsageExitsTwo) {
   EXPECT_EQ(runFromRoot(script + " --seqs tum/fr1_xyz --out x --jobs 0 --dry-run", dir), 2);
 }
 
+// tools/bench_alternate.sh: every variant once a round, the order turned by
+// one each round; the medians and the wall-time ratio to the first variant.
+TEST(BenchAlternate, VariantsAlternateRoundByRoundAndAreSummarised) {
+  const fs::path dir = test::scratchDir("reports_bench_alternate");
+  const fs::path out = dir / "alt";
+  const std::string script = quoted((test::sourceDir() / "tools" / "bench_alternate.sh").string());
+  const std::string bin = " --bin " + vslamBinary() + " -- --seq tum/fr1_xyz --max-frames 30 --detector none --no-render";
+  ASSERT_EQ(runFromRoot(script + " --rounds 2 --out " + quoted(out.string()) + " --variant mono" + bin +
+                            " --variant rgbd" + bin + " --mode rgbd",
+                        dir),
+            0)
+      << slurp(dir / "stderr");
+  std::istringstream rows(slurp(out / "runs.tsv"));
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(rows, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 5u) << slurp(out / "runs.tsv");
+  EXPECT_EQ(lines[0], "round\tvariant\tframes_tracked\tate_kf_m\tate_frames_m\tsim3_scale_frames\twall_s\tcpu_s");
+  EXPECT_EQ(lines[1].rfind("1\tmono\t", 0), 0u) << lines[1];
+  EXPECT_EQ(lines[2].rfind("1\trgbd\t", 0), 0u) << lines[2];
+  EXPECT_EQ(lines[3].rfind("2\trgbd\t", 0), 0u) << lines[3];  // the second round starts one variant later
+  EXPECT_EQ(lines[4].rfind("2\tmono\t", 0), 0u) << lines[4];
+  EXPECT_TRUE(fs::exists(out / "rgbd" / "round2" / "report.json"));
+  const std::string summary = slurp(dir / "stdout");
+  EXPECT_TRUE(contains(summary, "variant\tframes_tracked\tate_kf_m\tate_frames_m\tsim3_scale_frames\twall_s\tcpu_s\twall_vs_mono"))
+      << summary;
+  // The first variant's ratio to itself is 1 in every round.
+  const size_t mono_row = summary.find("\nmono\t");
+  ASSERT_NE(mono_row, std::string::npos) << summary;
+  const std::string mono_line = summary.substr(mono_row + 1, summary.find('\n', mono_row + 1) - mono_row - 1);
+  EXPECT_EQ(mono_line.substr(mono_line.rfind('\t') + 1), "1") << mono_line;
+  EXPECT_TRUE(contains(summary, "\nrgbd\t")) << summary;
+}
+
+TEST(BenchAlternate, BadUsageExitsTwoAndAFailedRunOne) {
+  const fs::path dir = test::scratchDir("reports_bench_alternate_usage");
+  const std::string script = quoted((test::sourceDir() / "tools" / "bench_alternate.sh").string());
+  const std::string out = " --out " + quoted((dir / "alt").string());
+  EXPECT_EQ(runFromRoot(script + out + " --rounds 0 --variant a -- --seq x", dir), 2);
+  EXPECT_TRUE(contains(slurp(dir / "stderr"), "--rounds takes a positive integer")) << slurp(dir / "stderr");
+  EXPECT_EQ(runFromRoot(script + out + " --variant a", dir), 2);
+  EXPECT_TRUE(contains(slurp(dir / "stderr"), "give its run arguments after --")) << slurp(dir / "stderr");
+  EXPECT_EQ(runFromRoot(script + out + " --variant a -- --seq x --variant a -- --seq y", dir), 2);
+  EXPECT_TRUE(contains(slurp(dir / "stderr"), "variant 'a' given twice")) << slurp(dir / "stderr");
+  EXPECT_EQ(runFromRoot(script + out + " --variant a --bin /no/such/vslam -- --seq x", dir), 2);
+  EXPECT_TRUE(contains(slurp(dir / "stderr"), "/no/such/vslam is not an executable")) << slurp(dir / "stderr");
+  // A run that fails stops the benchmark and names its log.
+  EXPECT_EQ(runFromRoot(script + out + " --rounds 1 --variant missing --bin " + vslamBinary() +
+                            " -- --seq " + quoted((dir / "no_such_sequence").string()),
+                        dir),
+            1);
+  EXPECT_TRUE(contains(slurp(dir / "stderr"), "variant 'missing', round 1 failed")) << slurp(dir / "stderr");
+}
+
 }  // namespace
 }  // namespace vslam

@@ -27,6 +27,7 @@ packages=(build-essential cmake pkg-config curl
           libopencv-dev libeigen3-dev libceres-dev libyaml-cpp-dev libcli11-dev
           libspdlog-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev libosmesa6-dev
           libsqlite3-dev sqlite3 libdeflate-dev jq curl ca-certificates parallel
+          time                          # tools/bench_alternate.sh: /usr/bin/time for wall and CPU
           clang-14 libclang-rt-14-dev   # tools/fuzz.sh: clang and libFuzzer
           python3-numpy python3-opencv) # tools/depth_scale_check.py and its test
 

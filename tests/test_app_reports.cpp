@@ -230,6 +230,30 @@ TEST(BatchEval, HelpDocumentsEveryOptionAndBadUsageExitsTwo) {
   EXPECT_EQ(runFromRoot(script + " --seqs tum/fr1_xyz --out x --jobs 0 --dry-run", dir), 2);
 }
 
+// tools/bench.sh: a figure a run cannot give (the keyframe ATE of a
+// 2-keyframe map) is nan in its row and left out of the median, which an
+// empty field used to turn into 0.
+TEST(BenchScript, FiguresARunCannotGiveAreNanNotZero) {
+  const fs::path dir = test::scratchDir("reports_bench_script");
+  const fs::path out = dir / "bench";
+  const std::string script = quoted((test::sourceDir() / "tools" / "bench.sh").string());
+  ASSERT_EQ(runFromRoot(script + " --runs 1 --out " + quoted(out.string()) + " --bin " + vslamBinary() +
+                            " -- --seq tum/fr1_xyz --max-frames 30 --mode rgbd --detector none --no-render",
+                        dir),
+            0)
+      << slurp(dir / "stderr");
+  const std::string rows = slurp(out / "runs.tsv");
+  EXPECT_EQ(rows.rfind("run\tframes_tracked\tate_kf_m\tate_frames_m\tsim3_scale_kf\ttrack_median_ms\ttrack_p95_ms\t"
+                       "wall_s\tfps\tpeak_mb\tsim3_scale_frames\telapsed_s\tcpu_s\n",
+                       0),
+            0u)
+      << rows;
+  EXPECT_TRUE(contains(rows, "\n1\t30\tnan\t")) << rows;
+  EXPECT_EQ(slurp(out / "median.tsv").rfind("median\t30\tnan\t", 0), 0u) << slurp(out / "median.tsv");
+  EXPECT_EQ(runFromRoot(script + " --runs 0 -- --seq x", dir), 2);
+  EXPECT_TRUE(contains(slurp(dir / "stderr"), "--runs takes a positive integer")) << slurp(dir / "stderr");
+}
+
 // tools/bench_alternate.sh: every variant once a round, the order turned by
 // one each round; the medians and the wall-time ratio to the first variant.
 TEST(BenchAlternate, VariantsAlternateRoundByRoundAndAreSummarised) {
@@ -251,7 +275,24 @@ TEST(BenchAlternate, VariantsAlternateRoundByRoundAndAreSummarised) {
   EXPECT_EQ(lines[2].rfind("1\trgbd\t", 0), 0u) << lines[2];
   EXPECT_EQ(lines[3].rfind("2\trgbd\t", 0), 0u) << lines[3];  // the second round starts one variant later
   EXPECT_EQ(lines[4].rfind("2\tmono\t", 0), 0u) << lines[4];
-  EXPECT_TRUE(fs::exists(out / "rgbd" / "round2" / "report.json"));
+  const auto fieldsOf = [](const std::string& line) {
+    std::istringstream fields(line);
+    std::vector<std::string> values;
+    for (std::string value; std::getline(fields, value, '\t');) values.push_back(value);
+    return values;
+  };
+  // Every figure is there, wall and CPU (tools/bench.sh's elapsed_s, cpu_s) included.
+  for (size_t row = 1; row < lines.size(); ++row) {
+    const std::vector<std::string> values = fieldsOf(lines[row]);
+    ASSERT_EQ(values.size(), 8u) << lines[row];
+    for (const std::string& value : values) EXPECT_FALSE(value.empty()) << lines[row];
+    EXPECT_GT(std::stod(values[6]), 0.0) << lines[row];
+    EXPECT_GT(std::stod(values[7]), 0.0) << lines[row];
+  }
+  // 30 RGB-D frames make 2 keyframes, too few for a keyframe ATE: the row
+  // says nan, and so does the median, not a 0 from empty fields.
+  EXPECT_EQ(fieldsOf(lines[2])[3], "nan") << lines[2];
+  EXPECT_TRUE(fs::exists(out / "rgbd" / "round2" / "run1" / "report.json"));
   const std::string summary = slurp(dir / "stdout");
   EXPECT_TRUE(contains(summary, "variant\tframes_tracked\tate_kf_m\tate_frames_m\tsim3_scale_frames\twall_s\tcpu_s\twall_vs_mono"))
       << summary;
@@ -260,7 +301,12 @@ TEST(BenchAlternate, VariantsAlternateRoundByRoundAndAreSummarised) {
   ASSERT_NE(mono_row, std::string::npos) << summary;
   const std::string mono_line = summary.substr(mono_row + 1, summary.find('\n', mono_row + 1) - mono_row - 1);
   EXPECT_EQ(mono_line.substr(mono_line.rfind('\t') + 1), "1") << mono_line;
-  EXPECT_TRUE(contains(summary, "\nrgbd\t")) << summary;
+  const size_t rgbd_row = summary.find("\nrgbd\t");
+  ASSERT_NE(rgbd_row, std::string::npos) << summary;
+  const std::vector<std::string> rgbd_medians =
+      fieldsOf(summary.substr(rgbd_row + 1, summary.find('\n', rgbd_row + 1) - rgbd_row - 1));
+  ASSERT_EQ(rgbd_medians.size(), 8u) << summary;
+  EXPECT_EQ(rgbd_medians[2], "nan") << summary;
 }
 
 TEST(BenchAlternate, BadUsageExitsTwoAndAFailedRunOne) {

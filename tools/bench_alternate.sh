@@ -9,13 +9,14 @@
 #        --variant rgbd -- --seq tum/fr1_xyz --mode rgbd --detector none --no-render
 # Each round runs every variant once, starting one variant later each round.
 # --bin runs another vslam binary (a scratch build) instead of build/vslam.
+# Each run goes through tools/bench.sh --runs 1, under OUT/NAME/roundR.
 # Prints a row per run (wall and CPU from /usr/bin/time, the rest from
 # report.json), then per variant the medians, and the median over rounds of
 # each variant's wall time divided by the first variant's in the same round.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-usage() { sed -n '2,14p' "$0"; }
+usage() { sed -n '2,15p' "$0"; }
 rounds=5
 out=runs/alternate-$(date +%Y%m%d-%H%M%S)
 names=() bins=()
@@ -29,8 +30,6 @@ while [ $# -gt 0 ]; do
   esac
 done
 [[ "$rounds" =~ ^[1-9][0-9]*$ ]] || { echo "bench_alternate.sh: --rounds takes a positive integer, not '$rounds'" >&2; exit 2; }
-command -v jq >/dev/null || { echo "bench_alternate.sh: needs jq (tools/setup.sh installs it)" >&2; exit 2; }
-[ -x /usr/bin/time ] || { echo "bench_alternate.sh: needs /usr/bin/time (Debian package time)" >&2; exit 2; }
 mkdir -p "$out"
 
 # Each variant's run arguments go to $out/NAME.args, one a line.
@@ -61,25 +60,24 @@ for round in $(seq 1 "$rounds"); do
     v=$(( (k + round - 1) % n ))
     name=${names[$v]}
     mapfile -t args < "$out/$name.args"
+    # One run through tools/bench.sh, so that both read report.json alike.
     dir="$out/$name/round$round"
-    mkdir -p "$dir"
-    if ! /usr/bin/time -f '%e %U %S' -o "$dir/time" "${bins[$v]}" run "${args[@]}" --out "$dir" \
-         > "$dir/stdout" 2> "$dir/log"; then
-      echo "bench_alternate.sh: variant '$name', round $round failed; see $dir/log" >&2
+    mkdir -p "$out/$name"
+    if ! tools/bench.sh --runs 1 --bin "${bins[$v]}" --out "$dir" -- "${args[@]}" \
+         > "$dir.stdout" 2> "$dir.stderr"; then
+      echo "bench_alternate.sh: variant '$name', round $round failed: $(tail -n 1 "$dir.stderr")" >&2
       exit 1
     fi
-    read -r wall user sys < "$dir/time"
-    jq -r --arg r "$round" --arg v "$name" --arg wall "$wall" --arg cpu "$(awk -v u="$user" -v s="$sys" 'BEGIN{print u + s}')" \
-      '[ $r, $v, .frames_tracked,
-         (if .ate then .ate.keyframes.rmse_m else "nan" end),
-         (if .ate then .ate.frames.rmse_m else "nan" end),
-         (if .ate then (.ate.frames.sim3_scale // .ate.frames.scale) else "nan" end),
-         $wall, $cpu ] | @tsv' "$dir/report.json" >> "$rows"
+    # Its columns by name; wall_s is the process's elapsed time.
+    awk -F'\t' -v r="$round" -v v="$name" \
+      'NR == 1 {for (c = 1; c <= NF; c++) col[$c] = c}
+       NR == 2 {print r "\t" v "\t" $col["frames_tracked"] "\t" $col["ate_kf_m"] "\t" $col["ate_frames_m"] "\t" \
+                      $col["sim3_scale_frames"] "\t" $col["elapsed_s"] "\t" $col["cpu_s"]}' "$dir/runs.tsv" >> "$rows"
     tail -n 1 "$rows"
   done
 done
 
-median() { sort -g | awk '{x[NR] = $1} END {if (NR == 0) print "nan"; else if (NR % 2) print x[(NR + 1) / 2]; else print (x[NR / 2] + x[NR / 2 + 1]) / 2}'; }
+median() { awk 'tolower($1) != "nan" && $1 != "" && $1 != "null"' | sort -g | awk '{x[NR] = $1} END {if (NR == 0) print "nan"; else if (NR % 2) print x[(NR + 1) / 2]; else print (x[NR / 2] + x[NR / 2 + 1]) / 2}'; }
 echo "# medians over $rounds rounds (load average at the end $(cut -d' ' -f1-3 /proc/loadavg)); rows in $rows"
 printf 'variant\tframes_tracked\tate_kf_m\tate_frames_m\tsim3_scale_frames\twall_s\tcpu_s\twall_vs_%s\n' "${names[0]}"
 for name in "${names[@]}"; do

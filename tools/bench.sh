@@ -58,10 +58,7 @@ done
   printf 'median'
   columns=$(head -n 1 "$rows" | awk -F'\t' '{print NF}')
   for c in $(seq 2 "$columns"); do
-    # A figure a run could not give (nan, e.g. ATE with under 3 keyframes) is left out.
-    tail -n +2 "$rows" | cut -f "$c" | awk 'tolower($1) != "nan" && $1 != "" && $1 != "null"' | sort -g |
-      awk '{ v[NR] = $1 } END { if (NR == 0) { printf "\tnan"; exit }
-             m = (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2; printf "\t%.4g", m }'
+    printf '\t%s' "$(tail -n +2 "$rows" | cut -f "$c" | sort -g | awk -v format=%.4g -f tools/median.awk)"
   done
   printf '\n'
 } | tee "$out/median.tsv"

@@ -77,7 +77,7 @@ for round in $(seq 1 "$rounds"); do
   done
 done
 
-median() { awk 'tolower($1) != "nan" && $1 != "" && $1 != "null"' | sort -g | awk '{x[NR] = $1} END {if (NR == 0) print "nan"; else if (NR % 2) print x[(NR + 1) / 2]; else print (x[NR / 2] + x[NR / 2 + 1]) / 2}'; }
+median() { sort -g | awk -f tools/median.awk; }
 echo "# medians over $rounds rounds (load average at the end $(cut -d' ' -f1-3 /proc/loadavg)); rows in $rows"
 printf 'variant\tframes_tracked\tate_kf_m\tate_frames_m\tsim3_scale_frames\twall_s\tcpu_s\twall_vs_%s\n' "${names[0]}"
 for name in "${names[@]}"; do

@@ -108,9 +108,14 @@ def main():
     parser.add_argument('--stride', type=int, default=5, help='take every N-th colour frame as a pair start')
     parser.add_argument('--time-offset', default='auto',
                         help="s added to colour timestamps before the ground-truth lookup, or 'auto' (default)")
+    parser.add_argument('--depth-bins', nargs='+', type=float, default=[0, 1.0, 1.5, 2.0, 3.0, 10.0], metavar='M',
+                        help='edges of the depth bins the ratio is also given for, m, increasing (default: 0 1 1.5 2 3 10)')
     args = parser.parse_args()
     if args.stride < 1 or args.depth_factor <= 0 or args.min_baseline <= 0:
         fail('--stride must be >= 1, --depth-factor and --min-baseline > 0')
+    edges = args.depth_bins
+    if len(edges) < 2 or any(hi <= lo for lo, hi in zip(edges, edges[1:])) or edges[0] < 0:
+        fail(f'--depth-bins {" ".join(f"{e:g}" for e in edges)}: give at least two edges, >= 0 and increasing')
 
     fx, fy, cx, cy = args.intrinsics
     K = np.array([[fx, 0, cx], [0, fy, cy], [0, 0, 1.0]])
@@ -285,10 +290,12 @@ def main():
     half = len(ratios) // 2
     print(f'depth reading / triangulated depth: median {med:.4f} (quartiles {q1:.4f}-{q3:.4f}); '
           f'first half of the points (by time) {np.median(ratios[:half]):.4f}, second half {np.median(ratios[half:]):.4f}')
-    for lo, hi in [(0, 1.0), (1.0, 1.5), (1.5, 2.0), (2.0, 3.0), (3.0, 10.0)]:
+    # As many decimals as the edges need (at least one): 0.75 must not print as 0.8.
+    decimals = max([1] + [len(f'{e:g}'.partition('.')[2]) for e in edges])
+    for lo, hi in zip(edges, edges[1:]):
         sel = (depths >= lo) & (depths < hi)
         if sel.sum() >= 20:
-            print(f'  depth {lo:.1f}-{hi:.1f} m: median {np.median(ratios[sel]):.4f} over {sel.sum()} points')
+            print(f'  depth {lo:.{decimals}f}-{hi:.{decimals}f} m: median {np.median(ratios[sel]):.4f} over {sel.sum()} points')
     print(f'depth factor that would make them agree: {args.depth_factor * med:.0f} (given {args.depth_factor:g})')
 
 

@@ -188,5 +188,42 @@ TEST(TrackingAfterRelocalisation, TheNextFrameCanBeTrackedFromTheLastFrameAtRest
   EXPECT_LT(Eigen::AngleAxisd(at_rest.T_cw.R.transpose() * moving.last.T_cw.R).angle(), 0.2 * M_PI / 180);
 }
 
+// The monocular start scores each window match at its keypoints' pyramid
+// levels (KITTI's configs match on levels 0-1). Before this, every match was
+// scored with sigma_px alone, as if found at level 0.
+TEST(TrackingInitialisation, MatchesCarryTheVarianceOfTheirPyramidLevels) {
+  ScalePyramid pyramid;
+  pyramid.levels = 3;
+  pyramid.scale = {1.0, 1.2, 1.44};
+  pyramid.sigma2 = {1.0, 1.44, 2.0736};
+  pyramid.inv_sigma2 = {1.0, 1.0 / 1.44, 1.0 / 2.0736};
+  auto frameWith = [&](const std::vector<int>& octaves) {
+    Frame frame;
+    frame.pyramid = &pyramid;
+    for (size_t i = 0; i < octaves.size(); ++i) {
+      cv::KeyPoint keypoint(cv::Point2f(10.0f * static_cast<float>(i), 5.0f), 31.0f);
+      keypoint.octave = octaves[i];
+      frame.keypoints.push_back(keypoint);
+      frame.points.push_back(keypoint.pt + cv::Point2f(0.5f, 0.25f));
+    }
+    return frame;
+  };
+  const Frame reference = frameWith({0, 1, 2});
+  const Frame current = frameWith({1, 0, 0, 2});
+  // Reference keypoint 0 matches current 3, 1 none, 2 matches current 0.
+  const InitialisationMatches matches = initialisationMatches(reference, current, {3, -1, 0}, 1.5);
+  ASSERT_EQ(matches.pairs.size(), 2u);
+  EXPECT_EQ(matches.pairs[0], std::make_pair(0, 3));
+  EXPECT_EQ(matches.pairs[1], std::make_pair(2, 0));
+  EXPECT_EQ(matches.pts_ref[1], Vec2(20.5, 5.25));
+  EXPECT_EQ(matches.pts_cur[0], Vec2(30.5, 5.25));
+  ASSERT_EQ(matches.sigma2_ref.size(), 2u);
+  ASSERT_EQ(matches.sigma2_cur.size(), 2u);
+  EXPECT_DOUBLE_EQ(matches.sigma2_ref[0], 2.25 * 1.0);     // level 0, sigma_px 1.5
+  EXPECT_DOUBLE_EQ(matches.sigma2_cur[0], 2.25 * 2.0736);  // level 2
+  EXPECT_DOUBLE_EQ(matches.sigma2_ref[1], 2.25 * 2.0736);
+  EXPECT_DOUBLE_EQ(matches.sigma2_cur[1], 2.25 * 1.44);    // level 1
+}
+
 }  // namespace
 }  // namespace vslam

@@ -95,6 +95,22 @@ void Tracking::startInLoadedMap(bool localization_only) {
   state_ = TrackingState::Lost;  // the first frame relocalises in the loaded map
 }
 
+InitialisationMatches initialisationMatches(const Frame& reference, const Frame& current,
+                                            const std::vector<int>& matches_ref_cur, double sigma_px) {
+  InitialisationMatches out;
+  const double sigma2_level0 = sigma_px * sigma_px;
+  for (size_t i = 0; i < matches_ref_cur.size(); ++i) {
+    const int j = matches_ref_cur[i];
+    if (j < 0) continue;
+    out.pts_ref.push_back(reference.point(i));
+    out.pts_cur.push_back(current.point(j));
+    out.sigma2_ref.push_back(sigma2_level0 * reference.pyramid->sigma2[reference.keypoints[i].octave]);
+    out.sigma2_cur.push_back(sigma2_level0 * current.pyramid->sigma2[current.keypoints[j].octave]);
+    out.pairs.emplace_back(static_cast<int>(i), j);
+  }
+  return out;
+}
+
 void Tracking::refreshLastFramePose() {
   if (!last_frame_ || !last_frame_->has_pose || records_.empty()) return;
   const FrameRecord& last = records_.back();
@@ -297,16 +313,12 @@ void Tracking::initialise(Frame& frame) {
     init_prev_matched_ = frame.points;
     return;
   }
-  std::vector<Vec2> pts_ref, pts_cur;
-  std::vector<std::pair<int, int>> pairs;
-  for (size_t i = 0; i < matches_ref_cur.size(); ++i) {
-    if (matches_ref_cur[i] < 0) continue;
-    pts_ref.push_back(reference.point(i));
-    pts_cur.push_back(frame.point(matches_ref_cur[i]));
-    pairs.emplace_back(static_cast<int>(i), matches_ref_cur[i]);
-  }
+  const InitialisationMatches initial =
+      initialisationMatches(reference, frame, matches_ref_cur, config_.initializer.sigma_px);
+  const std::vector<std::pair<int, int>>& pairs = initial.pairs;
   const TwoViewInitializer initializer(frame.camera->Keigen(), config_.initializer);
-  const TwoViewResult result = initializer.initialize(pts_ref, pts_cur);
+  const TwoViewResult result =
+      initializer.initialize(initial.pts_ref, initial.pts_cur, initial.sigma2_ref, initial.sigma2_cur);
   spdlog::debug("frame {}: init attempt with frame {}: {} matches, {} model inliers, {} triangulated, ratio {:.2f}, "
                 "parallax {:.2f} deg, translation direction +-{:.2f} deg: {}",
                 frame.index, reference.index, matched.count, result.n_model_inliers, result.n_triangulated,

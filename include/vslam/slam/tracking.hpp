@@ -47,6 +47,19 @@ bool motionModelAllowed(long frame_id, long last_relocalisation);
 bool keyFrameAllowedAfterRelocalisation(long frame_id, long last_relocalisation, int max_frames,
                                         size_t keyframes_in_map);
 
+// The monocular start's matches as the two-view initialiser takes them: the
+// points (undistorted pixels) and each one's pixel variance at its pyramid
+// level, sigma_px^2 * scale^(2 * level). The window search may match above
+// level 0 (initializer.window_max_level); scored as level 0, such matches
+// would fail the H/F and triangulation gates too often.
+struct InitialisationMatches {
+  std::vector<Vec2> pts_ref, pts_cur;
+  std::vector<double> sigma2_ref, sigma2_cur;
+  std::vector<std::pair<int, int>> pairs;  // (reference keypoint, current keypoint)
+};
+InitialisationMatches initialisationMatches(const Frame& reference, const Frame& current,
+                                            const std::vector<int>& matches_ref_cur, double sigma_px);
+
 // What became of one frame, kept for the trajectory: its pose relative to its
 // reference keyframe, so later keyframe corrections carry over.
 struct FrameRecord {

@@ -26,7 +26,6 @@ constexpr size_t kTriangulationNeighboursDepth = 10;  // RGB-D, as ORB-SLAM2
 // accurate (docs/BENCHMARKS.md), so both modes use 20.
 constexpr size_t kFuseNeighbours = 20;
 constexpr size_t kFuseSecondNeighbours = 5;
-constexpr double kMinParallaxCos = 0.9998;
 
 }  // namespace
 
@@ -318,6 +317,7 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
   int created = 0;
 
   const bool rgbd = config_.sensor == SensorMode::RgbD;
+  const double min_parallax_cos = config_.mapping.min_parallax_cos;
   const ProjectionModel model(camera, camera.bf);
   const double baseline = camera.baseline();
   // ORB-SLAM2 triangulates with 10 neighbours when depth is measured, 20 when not.
@@ -352,7 +352,7 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
       const double stereo_cos2 = depth2 ? std::cos(2 * std::atan2(baseline / 2, neighbour->depth[i2])) : 2.0;
       const double stereo_cos = std::min(stereo_cos1, stereo_cos2);
       Vec3 X;
-      if (parallax_cos > 0 && parallax_cos < stereo_cos && (depth1 || depth2 || parallax_cos < kMinParallaxCos)) {
+      if (parallax_cos > 0 && parallax_cos < stereo_cos && (depth1 || depth2 || parallax_cos < min_parallax_cos)) {
         // The two rays see the point from further apart than any depth reading does.
         if (!triangulateDlt(P1, P2, xn1.head<2>(), xn2.head<2>(), X)) continue;
       } else if (depth1 && stereo_cos1 < stereo_cos2) {

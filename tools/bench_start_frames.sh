@@ -6,9 +6,9 @@
 # (docs/BENCHMARKS.md, "KITTI 00 across start frames").
 #   tools/bench_start_frames.sh [--starts "0 1 ... 19"] [--bin PATH] [--out DIR] -- RUN_ARGS...
 # e.g. tools/bench_start_frames.sh -- --seq kitti/00 --detector none --no-render
-# Runs `vslam run RUN_ARGS --start-frame S --out DIR/start-S` for each S and
-# prints per start the frames tracked, keyframes and the keyframe and frame
-# ATE (report.json's ate.*.rmse_m, metres), then their medians.
+# Runs each start once through tools/bench.sh (`--runs 1 -- RUN_ARGS
+# --start-frame S`, into DIR/start-S) and prints per start the frames
+# tracked, keyframes and the keyframe and frame ATE (metres), then their medians.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 starts="$(seq -s ' ' 0 19)"
@@ -26,19 +26,20 @@ while [ $# -gt 0 ]; do
 done
 [ $# -gt 0 ] || { echo "bench_start_frames.sh: give the vslam run options after --" >&2; exit 2; }
 [ -x "$bin" ] || { echo "bench_start_frames.sh: $bin is not an executable (build first)" >&2; exit 2; }
-command -v jq >/dev/null || { echo "bench_start_frames.sh: needs jq" >&2; exit 2; }
 mkdir -p "$out"
 table="$out/starts.tsv"
 printf 'start\tframes_tracked\tkeyframes\tate_kf_m\tate_frames_m\n' >"$table"
 for start in $starts; do
   dir="$out/start-$start"
-  if ! "$bin" run "$@" --start-frame "$start" --out "$dir" >"$dir.log" 2>&1; then
-    echo "start $start: vslam run failed, see $dir.log" >&2
-  fi
-  if [ -f "$dir/report.json" ]; then
-    jq -r --arg s "$start" '[$s, .frames_tracked, .keyframes, (.ate.keyframes.rmse_m // "nan"), (.ate.frames.rmse_m // "nan")] | @tsv' \
-      "$dir/report.json" >>"$table"
+  if tools/bench.sh --runs 1 --bin "$bin" --out "$dir" -- "$@" --start-frame "$start" >"$dir.stdout" 2>"$dir.stderr"; then
+    # bench.sh's columns by name, and the keyframes from the run's report.
+    keyframes=$(jq -r .keyframes "$dir/run1/report.json")
+    awk -F'\t' -v s="$start" -v k="$keyframes" \
+      'NR == 1 {for (c = 1; c <= NF; c++) col[$c] = c}
+       NR == 2 {print s "\t" $col["frames_tracked"] "\t" k "\t" $col["ate_kf_m"] "\t" $col["ate_frames_m"]}' \
+      "$dir/runs.tsv" >>"$table"
   else
+    echo "start $start: the run failed: $(tail -n 1 "$dir.stderr")" >&2
     printf '%s\tnan\tnan\tnan\tnan\n' "$start" >>"$table"
   fi
 done

@@ -168,14 +168,11 @@ Config loadVslamYaml(const std::string& text, const std::string& path) {
   reader.optional(map, "mapping", "min_found_ratio", config.mapping.min_found_ratio);
   reader.optional(map, "mapping", "redundant_keyframe_ratio", config.mapping.redundant_keyframe_ratio);
   reader.optional(map, "mapping", "local_ba_iterations", config.mapping.local_ba_iterations);
-  if (map.IsDefined() && map["min_parallax_deg"]) {
-    double min_parallax_deg = 0;
-    reader.optional(map, "mapping", "min_parallax_deg", min_parallax_deg);
-    if (!(min_parallax_deg > 0 && min_parallax_deg < 90))
-      throw InputError(path, map.Mark().line + 1,
-                       "mapping.min_parallax_deg must lie in (0, 90) degrees, not " + std::to_string(min_parallax_deg));
-    config.mapping.min_parallax_cos = std::cos(min_parallax_deg * M_PI / 180.0);
-  }
+  reader.optional(map, "mapping", "min_parallax_deg", config.mapping.min_parallax_deg);
+  const double min_parallax = config.mapping.min_parallax_deg;
+  if (!(min_parallax > 0 && min_parallax < 90))
+    throw InputError(path, map.IsDefined() ? map.Mark().line + 1 : 0,
+                     "mapping.min_parallax_deg must lie in (0, 90) degrees, not " + std::to_string(min_parallax));
 
   const YAML::Node loop = reader.section("loop");
   reader.optional(loop, "loop", "enabled", config.loop.enabled);

@@ -317,7 +317,7 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
   int created = 0;
 
   const bool rgbd = config_.sensor == SensorMode::RgbD;
-  const double min_parallax_cos = config_.mapping.min_parallax_cos;
+  const double min_parallax_cos = std::cos(config_.mapping.min_parallax_deg * M_PI / 180.0);
   const ProjectionModel model(camera, camera.bf);
   const double baseline = camera.baseline();
   // ORB-SLAM2 triangulates with 10 neighbours when depth is measured, 20 when not.

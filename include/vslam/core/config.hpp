@@ -54,11 +54,12 @@ struct MappingParams {
   double redundant_keyframe_ratio = 0.9;
   int local_ba_iterations = 10;
   // A point triangulated from two views without depth needs its rays at
-  // least this far apart: cos of the angle, ORB-SLAM2's 0.9998 (1.15 deg).
-  // YAML gives it as mapping.min_parallax_deg. On the road the camera moves
-  // along its axis and many points ahead are seen at small parallax; KITTI's
-  // configs ask more (docs/BENCHMARKS.md, "KITTI 00 across start frames").
-  double min_parallax_cos = 0.9998;
+  // least this far apart, in (0, 90) degrees. The default is ORB-SLAM2's cos
+  // 0.9998 (acos gives these digits, whose cosine is 0.9998 exactly). On the
+  // road the camera moves along its axis and many points ahead are seen at
+  // small parallax; KITTI's configs ask more (docs/BENCHMARKS.md, "KITTI 00
+  // across start frames").
+  double min_parallax_deg = 1.1459346897142422;
 };
 
 struct LoopParams {

@@ -351,5 +351,26 @@ TEST(Config, MinParallaxIsReadInDegreesAndCheckedWithItsLine) {
   expectRefused("mapping", "min_parallax_deg", {"0", "-1", "90", "120", ".nan"});
 }
 
+// A range check names the bad key's own line. It named its section's mark,
+// which yaml-cpp puts at the section's first key, so a bad value under a
+// later key was reported on another key's line.
+TEST(Config, ARangeErrorNamesTheLineOfItsKeyNotOfTheSectionsFirstKey) {
+  const std::vector<std::pair<std::string, std::string>> later_keys = {
+      {"initializer:\n  min_matches: 100", "max_translation_direction_std_deg: 0"},
+      {"initializer:\n  min_matches: 100", "window_max_level: 8"},
+      {"mapping:\n  min_observations: 3", "min_parallax_deg: 120"},
+  };
+  for (const auto& [section, bad_line] : later_keys) {
+    // Line 8 holds the section, 9 its first key and 10 the bad one.
+    const std::string text = kMinimalCamera + section + "\n  " + bad_line + "\n";
+    try {
+      parseConfig(text, "bad.yaml");
+      ADD_FAILURE() << "accepted " << section << "." << bad_line;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.yaml:10:"), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace vslam

@@ -54,6 +54,16 @@ class YamlReader {
     read(node, section, key, out);
   }
 
+  // The line of `key` in `parent`, for an error about its value; the
+  // section's own line when the key is not there (a default out of range),
+  // 0 when neither is. A section's mark is its first key's, so range checks
+  // need this to name a later key's line.
+  int lineOf(const YAML::Node& parent, const char* key) const {
+    if (!parent) return 0;
+    const YAML::Node node = parent[key];
+    return (node ? node.Mark().line : parent.Mark().line) + 1;
+  }
+
   template <typename T>
   void optional(const YAML::Node& parent, const std::string& section, const char* key, T& out) const {
     if (!parent) return;
@@ -147,12 +157,12 @@ Config loadVslamYaml(const std::string& text, const std::string& path) {
   // (a NaN the reader already refuses as not finite).
   const double direction_bound = config.initializer.max_translation_direction_std_deg;
   if (!(direction_bound > 0 && direction_bound <= 180))
-    throw InputError(path, init.IsDefined() ? init.Mark().line + 1 : 0,
+    throw InputError(path, reader.lineOf(init, "max_translation_direction_std_deg"),
                      "initializer.max_translation_direction_std_deg must lie in (0, 180] degrees, not " +
                          std::to_string(direction_bound));
   reader.optional(init, "initializer", "window_max_level", config.initializer.window_max_level);
   if (config.initializer.window_max_level < 0 || config.initializer.window_max_level >= config.orb.n_levels)
-    throw InputError(path, init.IsDefined() ? init.Mark().line + 1 : 0,
+    throw InputError(path, reader.lineOf(init, "window_max_level"),
                      "initializer.window_max_level must be a pyramid level, 0 to orb.n_levels - 1 (" +
                          std::to_string(config.orb.n_levels - 1) + "), not " +
                          std::to_string(config.initializer.window_max_level));
@@ -171,7 +181,7 @@ Config loadVslamYaml(const std::string& text, const std::string& path) {
   reader.optional(map, "mapping", "min_parallax_deg", config.mapping.min_parallax_deg);
   const double min_parallax = config.mapping.min_parallax_deg;
   if (!(min_parallax > 0 && min_parallax < 90))
-    throw InputError(path, map.IsDefined() ? map.Mark().line + 1 : 0,
+    throw InputError(path, reader.lineOf(map, "min_parallax_deg"),
                      "mapping.min_parallax_deg must lie in (0, 90) degrees, not " + std::to_string(min_parallax));
 
   const YAML::Node loop = reader.section("loop");

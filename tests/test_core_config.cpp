@@ -351,6 +351,20 @@ TEST(Config, MinParallaxIsReadInDegreesAndCheckedWithItsLine) {
   expectRefused("mapping", "min_parallax_deg", {"0", "-1", "90", "120", ".nan"});
 }
 
+// Issue 18: the road configs triangulate a keyframe against the keyframes
+// before it too; the TUM ones and the defaults keep the covisible ones only.
+TEST(Config, MinTriangulationNeighboursIsReadAndChecked) {
+  const std::string camera = kMinimalCamera;
+  EXPECT_EQ(parseConfig(camera, "none.yaml").mapping.min_triangulation_neighbours, 0);
+  EXPECT_EQ(parseConfig(camera + "mapping:\n  min_triangulation_neighbours: 7\n", "n.yaml")
+                .mapping.min_triangulation_neighbours,
+            7);
+  for (const char* road : {"/kitti_00-02.yaml", "/kitti_03.yaml", "/kitti_04-12.yaml"})
+    EXPECT_EQ(loadConfig(projectConfigDir() + road).mapping.min_triangulation_neighbours, 80) << road;
+  EXPECT_EQ(loadConfig(projectConfigDir() + "/tum_fr1.yaml").mapping.min_triangulation_neighbours, 0);
+  expectRefused("mapping", "min_triangulation_neighbours", {"-1", "-80"});
+}
+
 // A range check names the bad key's own line. It named its section's mark,
 // which yaml-cpp puts at the section's first key, so a bad value under a
 // later key was reported on another key's line.
@@ -359,6 +373,7 @@ TEST(Config, ARangeErrorNamesTheLineOfItsKeyNotOfTheSectionsFirstKey) {
       {"initializer:\n  min_matches: 100", "max_translation_direction_std_deg: 0"},
       {"initializer:\n  min_matches: 100", "window_max_level: 8"},
       {"mapping:\n  min_observations: 3", "min_parallax_deg: 120"},
+      {"mapping:\n  min_observations: 3", "min_triangulation_neighbours: -1"},
   };
   for (const auto& [section, bad_line] : later_keys) {
     // Line 8 holds the section, 9 its first key and 10 the bad one.

@@ -224,6 +224,36 @@ TEST_F(MapGraphTest, CullingSeveralRedundantNeighboursExaminesEveryOne) {
   }
 }
 
+// Issue 18: on the road a keyframe shares its points with only the last few,
+// so the keyframes before it (along the spanning tree) make up the number of
+// triangulation neighbours. Here each keyframe shares 20 points with the one
+// before it only, as on a drive.
+TEST_F(MapGraphTest, TriangulationNeighboursAddTheKeyFramesBeforeWhereCovisiblesAreFew) {
+  std::vector<KeyFrame*> keyframes;
+  for (int k = 0; k < 8; ++k) {
+    keyframes.push_back(map_.createKeyFrame(makeFrame(k, 200, 0.1 * k)));
+    if (k > 0)
+      for (int i = 20 * (k - 1); i < 20 * k; ++i) observe({keyframes[k - 1], keyframes[k]}, i);
+    keyframes.back()->updateConnections();
+  }
+  KeyFrame* current = keyframes.back();
+  ASSERT_EQ(current->parent(), keyframes[6]);
+  auto ids = [](const std::vector<KeyFrame*>& list) {
+    std::vector<long> out;
+    for (const KeyFrame* kf : list) out.push_back(kf->id());
+    return out;
+  };
+  // 0: the covisible keyframes only (the TUM default), as before the setting.
+  EXPECT_EQ(ids(triangulationNeighbours(current, 20, 0)), (std::vector<long>{6}));
+  // The parent is covisible already: it is not listed twice.
+  EXPECT_EQ(ids(triangulationNeighbours(current, 20, 3)), (std::vector<long>{6, 5, 4}));
+  EXPECT_EQ(ids(triangulationNeighbours(current, 20, 4)), (std::vector<long>{6, 5, 4, 3}));
+  // More than the chain holds: it ends at the root.
+  EXPECT_EQ(ids(triangulationNeighbours(current, 20, 80)), (std::vector<long>{6, 5, 4, 3, 2, 1, 0}));
+  // Enough covisible keyframes: none is added.
+  EXPECT_EQ(ids(triangulationNeighbours(keyframes[3], 20, 2)), (std::vector<long>{2, 4}));
+}
+
 // Regression: a keyframe got a parent only at its first link with shared
 // points; one linked before it shared any stayed outside the spanning tree.
 TEST_F(MapGraphTest, KeyFrameWithoutSharedPointsTakesItsFallbackParent) {

@@ -52,16 +52,21 @@ TEST(SlamThreaded, Fr1XyzWholeSequenceTracksAccurately) {
 }
 
 // The first 200 frames of KITTI 00 drive down one street and never come back:
-// no loop may be closed. Threaded runs track 184 of 200 at 0.73 m keyframe ATE
-// (docs/BENCHMARKS.md, "Threaded against deterministic").
-TEST(SlamThreaded, KittiRoadClosesNoFalseLoop) {
+// no loop may be closed. Issue 18's bounds hold too: at least 98 % of the
+// frames tracked, keyframe ATE (Sim(3)) at most 0.6 m. Threaded runs track 199
+// of 200 at 0.380 m since the road configs triangulate against the keyframes
+// before (0.705 m before; docs/BENCHMARKS.md, "Triangulation with the
+// keyframes before").
+TEST(SlamThreaded, KittiRoadClosesNoFalseLoopAndMeetsIssue18sBounds) {
   const Sequence sequence = test::openSharedSequence("kitti/00");
   System system(withoutDetector(sequence.config), SystemOptions{});
   for (size_t i = 0; i < sequence.frames.size() && i < 200; ++i)
     system.processFrame(sequence.frames[i].index, sequence.frames[i].timestamp, sequence.loadColor(i));
   system.finish();
-  EXPECT_GE(system.stats().frames_tracked, 180);
+  EXPECT_GE(system.stats().frames_tracked, 196);
   EXPECT_TRUE(system.loops().empty());
+  const double keyframe_ate = ateRmse(system.keyframeTrajectory(), sequence.groundtruth);
+  EXPECT_LT(keyframe_ate, 0.6) << "keyframe ATE " << keyframe_ate;
 }
 
 struct RoomRun {

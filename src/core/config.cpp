@@ -183,6 +183,11 @@ Config loadVslamYaml(const std::string& text, const std::string& path) {
   if (!(min_parallax > 0 && min_parallax < 90))
     throw InputError(path, reader.lineOf(map, "min_parallax_deg"),
                      "mapping.min_parallax_deg must lie in (0, 90) degrees, not " + std::to_string(min_parallax));
+  reader.optional(map, "mapping", "min_triangulation_neighbours", config.mapping.min_triangulation_neighbours);
+  if (config.mapping.min_triangulation_neighbours < 0)
+    throw InputError(path, reader.lineOf(map, "min_triangulation_neighbours"),
+                     "mapping.min_triangulation_neighbours must be 0 or more, not " +
+                         std::to_string(config.mapping.min_triangulation_neighbours));
 
   const YAML::Node loop = reader.section("loop");
   reader.optional(loop, "loop", "enabled", config.loop.enabled);

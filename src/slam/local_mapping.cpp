@@ -322,7 +322,8 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
   const double baseline = camera.baseline();
   // ORB-SLAM2 triangulates with 10 neighbours when depth is measured, 20 when not.
   const size_t neighbours = rgbd ? kTriangulationNeighboursDepth : kTriangulationNeighbours;
-  const std::vector<KeyFrame*> covisibles = keyframe->bestCovisibles(neighbours);
+  const std::vector<KeyFrame*> covisibles =
+      triangulationNeighbours(keyframe, neighbours, config_.mapping.min_triangulation_neighbours);
   for (KeyFrame* neighbour : covisibles) {
     const Vec3 C2 = neighbour->cameraCentre();
     // Too short a baseline for the scene depth gives unreliable depth; with
@@ -392,7 +393,7 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
       ++created;
     }
   }
-  spdlog::debug("keyframe {}: {} new map points from {} covisible keyframes", keyframe->id(), created,
+  spdlog::debug("keyframe {}: {} new map points from {} neighbour keyframes", keyframe->id(), created,
                 covisibles.size());
 }
 
@@ -534,6 +535,18 @@ void LocalMapping::localBundleAdjustment(KeyFrame* keyframe) {
     carried_point.point->setPosition(carried_point.keyframe->pose().inverse() * carried_point.p_c);
     carried_point.point->updateNormalAndDepth(keyframe->pyramid());
   }
+}
+
+std::vector<KeyFrame*> triangulationNeighbours(KeyFrame* keyframe, size_t covisible_count, int min_neighbours) {
+  std::vector<KeyFrame*> neighbours = keyframe->bestCovisibles(covisible_count);
+  const size_t wanted = static_cast<size_t>(std::max(min_neighbours, 0));
+  KeyFrame* before = keyframe->parent();
+  for (size_t steps = 0; before && steps < wanted && neighbours.size() < wanted; ++steps) {
+    if (!before->isBad() && std::find(neighbours.begin(), neighbours.end(), before) == neighbours.end())
+      neighbours.push_back(before);
+    before = before->parent();
+  }
+  return neighbours;
 }
 
 std::vector<KeyFrame*> cullRedundantKeyFrames(KeyFrame* keyframe, double redundant_ratio, bool close_points_only) {

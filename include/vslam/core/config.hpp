@@ -60,6 +60,14 @@ struct MappingParams {
   // small parallax; KITTI's configs ask more (docs/BENCHMARKS.md, "KITTI 00
   // across start frames").
   double min_parallax_deg = 1.1459346897142422;
+  // A new keyframe is triangulated against its best covisible keyframes (20,
+  // or 10 with depth, as ORB-SLAM2). Where they are fewer than this, the
+  // keyframes before it along the spanning tree join them, up to this many in
+  // all: on the road a keyframe shares enough points with only the last 5-8,
+  // too short a baseline for the points ahead. 0: covisible keyframes only
+  // (the TUM default); KITTI's configs ask 80 (docs/BENCHMARKS.md,
+  // "Triangulation with the keyframes before").
+  int min_triangulation_neighbours = 0;
 };
 
 struct LoopParams {

@@ -32,6 +32,13 @@ class LoopClosing;
 std::vector<KeyFrame*> cullRedundantKeyFrames(KeyFrame* keyframe, double redundant_ratio,
                                               bool close_points_only = false);
 
+// The keyframes a new keyframe is triangulated against: its `covisible_count`
+// best covisible keyframes, then, while fewer than `min_neighbours`, those of
+// the `min_neighbours` keyframes before it along the spanning tree (parent,
+// grandparent, ...) that are live and not among them yet, nearest first.
+// Caller holds the map lock.
+std::vector<KeyFrame*> triangulationNeighbours(KeyFrame* keyframe, size_t covisible_count, int min_neighbours);
+
 class LocalMapping {
  public:
   LocalMapping(const Config& config, Map& map, StageTimer* timer);

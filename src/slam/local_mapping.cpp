@@ -322,9 +322,9 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
   const double baseline = camera.baseline();
   // ORB-SLAM2 triangulates with 10 neighbours when depth is measured, 20 when not.
   const size_t neighbours = rgbd ? kTriangulationNeighboursDepth : kTriangulationNeighbours;
-  const std::vector<KeyFrame*> covisibles =
+  const std::vector<KeyFrame*> neighbour_keyframes =
       triangulationNeighbours(keyframe, neighbours, config_.mapping.min_triangulation_neighbours);
-  for (KeyFrame* neighbour : covisibles) {
+  for (KeyFrame* neighbour : neighbour_keyframes) {
     const Vec3 C2 = neighbour->cameraCentre();
     // Too short a baseline for the scene depth gives unreliable depth; with
     // depth, a motion shorter than the virtual stereo baseline adds nothing.
@@ -394,7 +394,7 @@ void LocalMapping::triangulateNewPoints(KeyFrame* keyframe) {
     }
   }
   spdlog::debug("keyframe {}: {} new map points from {} neighbour keyframes", keyframe->id(), created,
-                covisibles.size());
+                neighbour_keyframes.size());
 }
 
 void LocalMapping::fuseDuplicates(KeyFrame* keyframe) {

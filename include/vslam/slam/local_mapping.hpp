@@ -26,7 +26,8 @@ class LoopClosing;
 
 // Culls the covisible neighbours of `keyframe` that are redundant: more than
 // `redundant_ratio` of their points are seen by at least three other keyframes
-// at the same or a finer scale. Returns the keyframes culled (set bad), in the
+// at the same scale, a finer one, or one pyramid level coarser (as ORB-SLAM2
+// counts them). Returns the keyframes culled (set bad), in the
 // order they were examined. Caller holds the map lock.
 // `close_points_only` (RGB-D): only keypoints with depth below the close depth count.
 std::vector<KeyFrame*> cullRedundantKeyFrames(KeyFrame* keyframe, double redundant_ratio,

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_test_support.hpp"
+#include "vslam/core/config.hpp"
 #include "vslam/eval/ate.hpp"
 #include "vslam/io/trajectory_io.hpp"
 
@@ -432,11 +433,40 @@ TEST(CliEval, AlignmentFollowsTheRunsMode) {
   EXPECT_FALSE(contains(forced.out, "alignment:")) << forced.out;
 }
 
+// --config takes ground truth of another body to the camera: Bonn's markers'
+// poses, scored against the camera poses they stand for, agree only with
+// config/bonn.yaml's evaluation section applied.
+TEST(CliEval, ConfigTakesTheGroundTruthOfAnotherBodyToTheCamera) {
+  const fs::path dir = test::scratchDir("cli_eval_body");
+  const std::string markers = (test::sharedData() / "bonn" / "rgbd_bonn_crowd" / "groundtruth.txt").string();
+  const std::string config = projectConfigDir() + "/bonn.yaml";
+  const SE3 camera_in_markers = *loadConfig(config).evaluation.groundtruth_camera_in_body;
+  std::vector<StampedPose> camera = readTumTrajectory(markers);
+  for (StampedPose& pose : camera) pose.T_wc = pose.T_wc * camera_in_markers;
+  const std::string est = (dir / "camera.txt").string();
+  writeTumTrajectory(est, camera);
+  const std::string json_path = (dir / "eval.json").string();
+
+  const Outcome raw = vslam("eval --est " + quoted(est) + " --gt " + quoted(markers) + " --json " + quoted(json_path));
+  ASSERT_EQ(raw.exit_code, 0) << raw.err;
+  EXPECT_GT(nlohmann::json::parse(slurp(json_path))["rpe"]["rot_rmse_deg"].get<double>(), 5.0);
+
+  const Outcome taken = vslam("eval --est " + quoted(est) + " --gt " + quoted(markers) + " --config " +
+                              quoted(config) + " --json " + quoted(json_path));
+  ASSERT_EQ(taken.exit_code, 0) << taken.err;
+  EXPECT_TRUE(contains(taken.out, "evaluation.groundtruth_camera_in_body")) << taken.out;
+  const nlohmann::json json = nlohmann::json::parse(slurp(json_path));
+  EXPECT_LT(json["rmse_m"].get<double>(), 1e-6);  // the file's 9 significant digits
+  EXPECT_LT(json["rpe"]["rot_rmse_deg"].get<double>(), 1e-4);
+  EXPECT_EQ(json["config"], config);
+}
+
 TEST(CliEval, HelpListsEveryOptionAndItsDefault) {
   const Outcome help = vslam("eval --help");
   EXPECT_EQ(help.exit_code, 0);
   for (const char* option :
-       {"--est", "--gt", "--align", "=auto", "--format", "=tum", "--json", "--max-dt", "=0.02", "--rpe-delta"})
+       {"--est", "--gt", "--align", "=auto", "--format", "=tum", "--json", "--max-dt", "=0.02", "--rpe-delta",
+        "--config"})
     EXPECT_TRUE(contains(help.out, option)) << option << "\n" << help.out;
 }
 

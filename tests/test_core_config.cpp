@@ -3,6 +3,7 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/SVD>
 #include <gtest/gtest.h>
 
 #include "test_support.hpp"
@@ -385,6 +386,47 @@ TEST(Config, ARangeErrorNamesTheLineOfItsKeyNotOfTheSectionsFirstKey) {
       EXPECT_NE(std::string(e.what()).find("bad.yaml:10:"), std::string::npos) << e.what();
     }
   }
+}
+
+// Bonn RGB-D Dynamic's ground truth is its markers' pose. config/bonn.yaml
+// takes it to the camera with the dataset page's calibration, T_ros * T_m,
+// whose rotation (a rotation times 1.0593) is projected onto SO(3); the TUM
+// and KITTI configs have none, since their ground truth is the camera's.
+TEST(Config, BonnGroundTruthIsTakenToTheCameraByThePublishedCalibration) {
+  Eigen::Matrix4d T_ros, T_m;
+  T_ros << -1, 0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 0, 0, 1;
+  T_m << 1.0157, 0.1828, -0.2389, 0.0113, 0.0009, -0.8431, -0.6413, -0.0098, -0.3009, 0.6147, -0.8085, 0.0111, 0, 0,
+      0, 1;
+  const Eigen::Matrix4d published = T_ros * T_m;
+  const Eigen::JacobiSVD<Mat3> svd(published.topLeftCorner<3, 3>(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Mat3 nearest_rotation = svd.matrixU() * svd.matrixV().transpose();
+
+  const Config bonn = loadConfig(projectConfigDir() + "/bonn.yaml");
+  ASSERT_TRUE(bonn.evaluation.groundtruth_camera_in_body.has_value());
+  const SE3& camera_in_body = *bonn.evaluation.groundtruth_camera_in_body;
+  EXPECT_LT((camera_in_body.R - nearest_rotation).cwiseAbs().maxCoeff(), 2e-9);
+  EXPECT_LT((camera_in_body.t - published.topRightCorner<3, 1>()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((camera_in_body.R.transpose() * camera_in_body.R - Mat3::Identity()).cwiseAbs().maxCoeff(), 1e-12);
+  for (const char* name : {"/tum_fr1.yaml", "/tum_fr3.yaml", "/kitti_00-02.yaml"})
+    EXPECT_FALSE(loadConfig(projectConfigDir() + name).evaluation.groundtruth_camera_in_body.has_value()) << name;
+}
+
+TEST(Config, GroundTruthCameraInBodyIsReadAndChecked) {
+  const Config config = parseConfig(kMinimalCamera +
+                                        "evaluation:\n  groundtruth_camera_in_body: [0, -1, 0, 0.1, 1, 0, 0, 0.2, "
+                                        "0, 0, 1, 0.3]\n",
+                                    "turned.yaml");
+  ASSERT_TRUE(config.evaluation.groundtruth_camera_in_body.has_value());
+  const SE3& offset = *config.evaluation.groundtruth_camera_in_body;
+  EXPECT_NEAR(offset.R(0, 1), -1.0, 1e-15);
+  EXPECT_NEAR(offset.R(1, 0), 1.0, 1e-15);
+  EXPECT_NEAR(offset.R(2, 2), 1.0, 1e-15);
+  EXPECT_DOUBLE_EQ(offset.t.x(), 0.1);
+  EXPECT_DOUBLE_EQ(offset.t.z(), 0.3);
+  // 11 numbers; a scaled rotation (Bonn's T_m as published); a reflection; a NaN; not numbers.
+  expectRefused("evaluation", "groundtruth_camera_in_body",
+                {"[1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]", "[1.06, 0, 0, 0, 0, 1.06, 0, 0, 0, 0, 1.06, 0]",
+                 "[-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]", "[1, 0, 0, .nan, 0, 1, 0, 0, 0, 0, 1, 0]", "[a, b]"});
 }
 
 }  // namespace

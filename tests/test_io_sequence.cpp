@@ -1,5 +1,6 @@
 // Sequence readers on the real TUM and KITTI data in ../shared/data, and every
 // kind of bad input on small folders made in the scratch directory.
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -13,6 +14,7 @@
 #include "vslam/io/sequence_catalog.hpp"
 #include "vslam/io/sequence_files.hpp"
 #include "vslam/io/text_table.hpp"
+#include "vslam/io/trajectory_io.hpp"
 
 namespace vslam {
 namespace {
@@ -151,6 +153,32 @@ TEST(Sequence, BonnCrowdByNameWithItsCamera) {
   EXPECT_FALSE(crowd.groundtruth.empty());
   // The folder by path takes the same camera from its name.
   EXPECT_EQ(openSequence(crowd.root, sharedRoot()).config.camera.name, "bonn");
+}
+
+// Bonn's groundtruth.txt gives its markers' pose; the sequence hands out the
+// camera's, T_world_markers * (config/bonn.yaml's camera in the markers). The
+// markers are turned 173 degrees from the camera, so read as the camera's
+// they made every rotation error (RPE) false (10.3 deg/s where it is 0.6).
+TEST(Sequence, BonnGroundTruthIsTheCamerasNotTheMarkers) {
+  const Sequence crowd = openSequence("bonn/crowd", sharedRoot());
+  const std::vector<StampedPose> markers = readTumTrajectory(crowd.groundtruth_path);
+  ASSERT_EQ(crowd.groundtruth.size(), markers.size());
+  ASSERT_TRUE(crowd.config.evaluation.groundtruth_camera_in_body.has_value());
+  const SE3& camera_in_markers = *crowd.config.evaluation.groundtruth_camera_in_body;
+  for (size_t i : {size_t{0}, markers.size() / 2, markers.size() - 1}) {
+    const SE3 expected = markers[i].T_wc * camera_in_markers;
+    EXPECT_DOUBLE_EQ(crowd.groundtruth[i].timestamp, markers[i].timestamp);
+    EXPECT_LT((crowd.groundtruth[i].T_wc.R - expected.R).cwiseAbs().maxCoeff(), 1e-12) << i;
+    EXPECT_LT((crowd.groundtruth[i].T_wc.t - expected.t).norm(), 1e-12) << i;
+  }
+  // The camera's and the markers' rotations differ by the offset's 172.7 degrees.
+  const double turn = Eigen::AngleAxisd(markers[0].T_wc.R.transpose() * crowd.groundtruth[0].T_wc.R).angle();
+  EXPECT_NEAR(turn * 180 / M_PI, 172.73, 0.01);
+  // TUM's ground truth is the camera's own: read as written.
+  const Sequence xyz = openSequence("tum/fr1_xyz", sharedRoot());
+  const std::vector<StampedPose> written = readTumTrajectory(xyz.groundtruth_path);
+  EXPECT_EQ((xyz.groundtruth[10].T_wc.t - written[10].T_wc.t).norm(), 0.0);
+  EXPECT_EQ((xyz.groundtruth[10].T_wc.R - written[10].T_wc.R).norm(), 0.0);
 }
 
 TEST(Sequence, CalibrationP0OverridesTheConfig) {

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "vslam/core/config.hpp"
 #include "vslam/core/error.hpp"
 #include "vslam/eval/ate.hpp"
 #include "vslam/eval/kitti_odometry_metric.hpp"
@@ -28,6 +29,7 @@ struct EvalOptions {
   std::string align = "auto";
   std::string format = "tum";
   std::string json_path;
+  std::string config_path;  // its evaluation section (the ground truth's camera offset), "" for none
   double max_dt = 0.02;
   double time_offset_s = 0.0;  // added to the estimate's timestamps, as evaluate_ate.py's --offset
   double rpe_delta = 0.0;  // 0 = 1 s (TUM) or 100 m (KITTI)
@@ -188,7 +190,15 @@ int run(const EvalOptions& options) {
   if (options.kitti_metrics && !kitti)
     throw InputError("--kitti-metrics needs --format kitti (KITTI trajectories, paired by frame)");
   const TrajectoryFile estimate_file = readTrajectory(options.estimate_path, options.format);
-  const TrajectoryFile groundtruth_file = readTrajectory(options.groundtruth_path, options.format);
+  TrajectoryFile groundtruth_file = readTrajectory(options.groundtruth_path, options.format);
+  if (!options.config_path.empty()) {
+    const Config config = loadConfig(options.config_path);
+    if (const std::optional<SE3>& camera_in_body = config.evaluation.groundtruth_camera_in_body) {
+      for (StampedPose& pose : groundtruth_file.poses) pose.T_wc = pose.T_wc * *camera_in_body;
+      std::cout << "ground truth taken to the camera by " << options.config_path
+                << "'s evaluation.groundtruth_camera_in_body\n";
+    }
+  }
   std::vector<StampedPose> estimate = estimate_file.poses, groundtruth = groundtruth_file.poses;
   if (options.time_offset_s != 0.0) {
     if (kitti) throw InputError("--offset shifts timestamps; --format kitti pairs by frame and has none");
@@ -254,6 +264,7 @@ int run(const EvalOptions& options) {
     json["alignment"] = toString(ate_options.alignment);
     json["estimate"] = options.estimate_path;
     json["groundtruth"] = options.groundtruth_path;
+    if (!options.config_path.empty()) json["config"] = options.config_path;
     json["time_offset_s"] = options.time_offset_s;
     nlohmann::json rpe_json = toJson(rpe);
     rpe_json["delta"] = rpe_options.delta;
@@ -287,6 +298,10 @@ Command addEvalCommand(CLI::App& app) {
                   "a line, paired by frame: line i is frame i, or as listed in NAME_frames.txt beside NAME.txt)")
       ->check(CLI::IsMember({"tum", "kitti"}))
       ->capture_default_str();
+  cli->add_option("--config", options->config_path,
+                  "A config whose evaluation section applies to --gt: groundtruth_camera_in_body takes ground "
+                  "truth given for another body (Bonn RGB-D Dynamic's markers: config/bonn.yaml) to the camera. "
+                  "A run folder's groundtruth.txt is the camera's already");
   cli->add_option("--json", options->json_path, "Also write the figures to this JSON file (default: none)");
   cli->add_option("--max-dt", options->max_dt, "Largest timestamp difference of a pair, seconds (tum format)")
       ->check(CLI::PositiveNumber)

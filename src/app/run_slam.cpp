@@ -693,6 +693,17 @@ int runSlam(const Sequence& sequence, const RunOptions& options) {
     report["groundtruth_source"] = sequence.groundtruth_path;
     report["groundtruth_file"] = "groundtruth.txt";  // in the run folder
   }
+  // Ground truth of another body (Bonn's markers), scored as the camera's:
+  // the [R | t] that took it there, row by row; null when it was the camera's.
+  report["groundtruth_camera_in_body"] = nlohmann::json();
+  if (const std::optional<SE3>& camera_in_body = sequence.config.evaluation.groundtruth_camera_in_body) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) rows.push_back(camera_in_body->R(r, c));
+      rows.push_back(camera_in_body->t(r));
+    }
+    report["groundtruth_camera_in_body"] = rows;
+  }
   putAccuracy(report, system, sequence, mono, trajectory, keyframes);
   if (kitti) {
     write([&] {

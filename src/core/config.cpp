@@ -88,6 +88,12 @@ class YamlReader {
       if (!std::isfinite(out))
         throw InputError(path_, node.Mark().line + 1, "key '" + qualified(section, key) + "' is not a finite number");
     }
+    if constexpr (std::is_same_v<T, std::vector<double>>) {
+      for (double value : out)
+        if (!std::isfinite(value))
+          throw InputError(path_, node.Mark().line + 1,
+                           "key '" + qualified(section, key) + "' holds a number that is not finite");
+    }
   }
   template <typename T>
   static const char* typeName() {
@@ -95,12 +101,38 @@ class YamlReader {
     else if constexpr (std::is_same_v<T, double>) return "a number";
     else if constexpr (std::is_same_v<T, bool>) return "true or false";
     else if constexpr (std::is_same_v<T, std::string>) return "a string";
+    else if constexpr (std::is_same_v<T, std::vector<double>>) return "a list of numbers";
     else return "a list of strings";
   }
 
   std::string path_;
   YAML::Node root_;
 };
+
+// A rigid transform written as the 12 numbers of its 3x4 matrix [R | t], row
+// by row (a KITTI pose line). R must be a rotation to 1e-6: a matrix that is
+// not is an error, not something to round silently.
+SE3 rigidTransformFromRows(const std::vector<double>& rows, const std::string& path, int line, const std::string& key) {
+  if (rows.size() != 12)
+    throw InputError(path, line,
+                     key + " must hold 12 numbers, the 3x4 matrix [R | t] row by row, not " +
+                         std::to_string(rows.size()));
+  Mat3 R;
+  Vec3 t;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) R(r, c) = rows[4 * r + c];
+    t(r) = rows[4 * r + 3];
+  }
+  constexpr double kTolerance = 1e-6;
+  const double off_orthonormal = (R.transpose() * R - Mat3::Identity()).cwiseAbs().maxCoeff();
+  if (off_orthonormal > kTolerance || R.determinant() < 0)
+    throw InputError(path, line,
+                     key + ": its 3x3 part is not a rotation (R^T R differs from the identity by " +
+                         std::to_string(off_orthonormal) + ", determinant " + std::to_string(R.determinant()) +
+                         "); give an orthonormal matrix of determinant +1");
+  // Orthonormal to the digits written; made so to machine precision.
+  return SE3(Quat(R).normalized(), t);
+}
 
 Config loadVslamYaml(const std::string& text, const std::string& path) {
   YamlReader reader(path);
@@ -229,6 +261,15 @@ Config loadVslamYaml(const std::string& text, const std::string& path) {
   if (!isBoxFilter(d.box_filter))
     throw InputError(path, det.Mark().line + 1,
                      "detector.box_filter must be 'paper', 'reuse' or 'label', not '" + d.box_filter + "'");
+
+  const YAML::Node evaluation = reader.section("evaluation");
+  if (evaluation && evaluation["groundtruth_camera_in_body"]) {
+    std::vector<double> rows;
+    reader.optional(evaluation, "evaluation", "groundtruth_camera_in_body", rows);
+    config.evaluation.groundtruth_camera_in_body =
+        rigidTransformFromRows(rows, path, reader.lineOf(evaluation, "groundtruth_camera_in_body"),
+                               "evaluation.groundtruth_camera_in_body");
+  }
   return config;
 }
 

@@ -312,6 +312,10 @@ Sequence openSequence(const std::string& spec, const SequenceOptions& options) {
     readTumFolder(sequence);
   else
     readKittiFolder(sequence, located.kitti_poses);
+  // Scored as the camera's poses from here on: by the run's report, its
+  // groundtruth.txt, the plots and the tests alike.
+  if (const std::optional<SE3>& camera_in_body = sequence.config.evaluation.groundtruth_camera_in_body)
+    for (StampedPose& pose : sequence.groundtruth) pose.T_wc = pose.T_wc * *camera_in_body;
 
   // A KITTI sequence's own files define its camera: calib.txt the intrinsics
   // (read above), the images their size (sequences 13-21 have no camera file of their own).

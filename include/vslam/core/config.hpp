@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "vslam/core/camera.hpp"
+#include "vslam/core/types.hpp"
 
 namespace vslam {
 
@@ -172,6 +173,17 @@ inline DetectEvery detectEvery(const DetectorParams& params) {
 
 inline bool isBoxFilter(const std::string& name) { return name == "paper" || name == "reuse" || name == "label"; }
 
+// How the ground truth is read when its poses are not the camera's own.
+struct EvaluationParams {
+  // The camera's pose in the frame whose poses the ground truth gives
+  // (T_body_camera): the camera's pose is then T_world_body * T_body_camera.
+  // Unset for TUM and KITTI, whose ground truth is the camera's. Bonn RGB-D
+  // Dynamic's motion capture gives its markers' pose (config/bonn.yaml).
+  // Without it, rotation errors (RPE) compare the markers' turn with the
+  // camera's and mean nothing (docs/EVALUATION.md).
+  std::optional<SE3> groundtruth_camera_in_body;
+};
+
 // What the run feeds the pipeline: colour alone, or colour with registered
 // depth (ORB-SLAM2's RGB-D system). Chosen by `vslam run --mode`, not by the file.
 enum class SensorMode { Monocular, RgbD };
@@ -187,6 +199,7 @@ struct Config {
   MappingParams mapping;
   LoopParams loop;
   DetectorParams detector;
+  EvaluationParams evaluation;
 };
 
 // Reads our YAML layout (see config/*.yaml) or an ORB-SLAM2 settings file

@@ -40,7 +40,10 @@ class Sequence {
   SequenceKind kind = SequenceKind::Tum;
   Config config;  // camera + pipeline parameters (from config/<camera>.yaml or --config)
   std::vector<FrameEntry> frames;
-  std::vector<StampedPose> groundtruth;  // T_wc; KITTI: one per frame, timestamp = times.txt
+  // T_wc of the camera; KITTI: one per frame, timestamp = times.txt. Where the
+  // file gives another body's pose, config.evaluation.groundtruth_camera_in_body
+  // has taken it to the camera.
+  std::vector<StampedPose> groundtruth;
   std::string groundtruth_path;          // "" when the sequence has none
   // Frames the catalogue knows the named sequence to have (tum/..., kitti/NN),
   // 0 when unknown (a folder given by path, or a count not in the catalogue).
